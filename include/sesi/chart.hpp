@@ -1,0 +1,86 @@
+#pragma once
+/// @file chart.hpp
+/// The minimum API of a hierarchical chart (docs/concepts.md lists it as a table).
+///
+/// A chart of an n-dimensional configuration space whose kinetic energy per body splits as
+///   K(q, p) = sum_{i=1..n} K_i(q_1..q_{i-1}, p_i)
+/// (seed paper, Discussion). The flow of one K_i alone keeps q_{<i} and p_i fixed, so it is
+/// exact and explicit: q_i += h dK_i/dp_i, p_k -= h dK_i/dq_k for k < i.
+/// Levels are numbered 0..n-1 in code (level i in code is K_{i+1} of the paper).
+
+#include <concepts>
+#include <Eigen/Core>
+
+namespace sesi {
+
+/// Compile-time dimension helpers (Eigen::Dynamic stays Dynamic).
+constexpr int plus_one(int n) { return n == Eigen::Dynamic ? Eigen::Dynamic : n + 1; }
+
+/// The minimum a chart must provide: the level terms and their derivatives, for a body of mass m.
+template <class C>
+concept HierarchicalChart =
+    requires(const C& c, const typename C::Point& q, typename C::Scalar pi, typename C::Scalar m,
+             int i, int k) {
+      typename C::Scalar;
+      typename C::Point;  // Eigen column vector of size C::dimension (chart coordinates or momenta)
+      { C::dimension } -> std::convertible_to<int>;
+      { c.dim() } -> std::convertible_to<int>;
+      { c.kinetic(i, q, pi, m) } -> std::convertible_to<typename C::Scalar>;        // K_i
+      { c.kinetic_dp(i, q, pi, m) } -> std::convertible_to<typename C::Scalar>;     // dK_i/dp_i
+      { c.kinetic_dq(i, k, q, pi, m) } -> std::convertible_to<typename C::Scalar>;  // dK_i/dq_k, k<i
+    };
+
+/// A chart with an embedding in an ambient vector space, so that potentials written on ambient
+/// points apply to it: x = embed(q), and the pull-back of an ambient gradient, J(q)^T g.
+template <class C>
+concept EmbeddedChart =
+    HierarchicalChart<C> &&
+    requires(const C& c, const typename C::Point& q, typename C::Point& out,
+             const typename C::Ambient& g, typename C::Ambient& x) {
+      typename C::Ambient;
+      { C::ambient_dimension } -> std::convertible_to<int>;
+      { c.ambient_dim() } -> std::convertible_to<int>;
+      c.embed(q, x);         // x = embedding of q
+      c.pullback(q, g, out); // out = J(q)^T g, J = dx/dq
+    };
+
+/// A chart that supplies its own exact level flow (built-in charts do: it shares the sines).
+template <class C>
+concept HasLevelFlow =
+    requires(const C& c, typename C::Point& q, typename C::Point& p, typename C::Scalar m,
+             typename C::Scalar h, int i) { c.level_flow(i, q, p, m, h); };
+
+/// A space with a geodesic distance and constant curvature (needed by pair terms on the distance).
+template <class C>
+concept MetricSpace = EmbeddedChart<C> && requires(const C& c, const typename C::Ambient& x,
+                                                   typename C::Ambient& g) {
+  { c.distance(x, x) } -> std::convertible_to<typename C::Scalar>;
+  c.distance_gradient(x, x, g);  // g = d(distance)/dx at the first argument, tangent to the space
+  { c.curvature() } -> std::convertible_to<typename C::Scalar>;
+};
+
+/// The exact flow of K_i for time h on one body, from the concept's minimum API alone:
+/// q_i += h dK_i/dp_i, and p_k -= h dK_i/dq_k for k < i (all evaluated at the start, which is
+/// exact because q_{<i} and p_i do not move under this flow).
+template <HierarchicalChart C>
+void level_flow(const C& chart, int i, typename C::Point& q, typename C::Point& p,
+                typename C::Scalar m, typename C::Scalar h) {
+  if constexpr (HasLevelFlow<C>) {
+    chart.level_flow(i, q, p, m, h);
+  } else {
+    const auto pi = p[i];
+    for (int k = 0; k < i; ++k) p[k] -= h * chart.kinetic_dq(i, k, q, pi, m);
+    q[i] += h * chart.kinetic_dp(i, q, pi, m);
+  }
+}
+
+/// Kinetic energy of one body, sum of the level terms.
+template <HierarchicalChart C>
+typename C::Scalar kinetic_energy(const C& chart, const typename C::Point& q,
+                                  const typename C::Point& p, typename C::Scalar m) {
+  typename C::Scalar k(0);
+  for (int i = 0; i < chart.dim(); ++i) k += chart.kinetic(i, q, p[i], m);
+  return k;
+}
+
+}  // namespace sesi

@@ -1,0 +1,91 @@
+#pragma once
+/// @file diagnostics.hpp
+/// Conserved quantities in the embedding: energy and the momentum map.
+///
+/// On S^n and H^n the momentum map of the isometry group (SO(n+1), SO(n,1)) is represented by
+/// the antisymmetric matrix M = sum_b m_b (x_b v_b^T - v_b x_b^T), conserved by geodesic motion
+/// (x'' is parallel to x on both) and by isometry-invariant potentials. On S^2 its entries
+/// (M_12, M_13, M_23) are (L_z, -L_y, L_x) of L = sum m x cross v. On E^n the map is the linear
+/// momentum P = sum m v followed by the same M (angular momentum).
+/// The vector form lists P (E^n only), then M_ab for a < b in row-major order.
+
+#include <Eigen/Core>
+
+#include "sesi/chart.hpp"
+#include "sesi/state.hpp"
+
+namespace sesi {
+
+/// Charts whose ambient space has translations among the isometries (E^n).
+template <class Chart>
+constexpr bool has_translations = requires { Chart::translation_invariant; };
+
+/// Number of components of the momentum map vector.
+template <EmbeddedChart Chart>
+int momentum_map_size(const Chart& chart) {
+  const int a = chart.ambient_dim();
+  return a * (a - 1) / 2 + (has_translations<Chart> ? a : 0);
+}
+
+/// Embedding points (columns) of all bodies.
+template <class Sys>
+Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_points(
+    const Sys& sys, const State<typename Sys::Chart>& s) {
+  using Chart = typename Sys::Chart;
+  Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> X(sys.ambient_dim(),
+                                                                         sys.bodies());
+  typename Chart::Point q(sys.dim());
+  typename Chart::Ambient x(sys.ambient_dim());
+  for (int b = 0; b < sys.bodies(); ++b) {
+    q = s.q.col(b);
+    sys.chart().embed(q, x);
+    X.col(b) = x;
+  }
+  return X;
+}
+
+/// Embedding velocities (columns) of all bodies.
+template <class Sys>
+Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_velocities(
+    const Sys& sys, const State<typename Sys::Chart>& s) {
+  using Chart = typename Sys::Chart;
+  Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> V(sys.ambient_dim(),
+                                                                         sys.bodies());
+  typename Chart::Point q(sys.dim()), p(sys.dim());
+  typename Chart::Ambient v(sys.ambient_dim());
+  for (int b = 0; b < sys.bodies(); ++b) {
+    q = s.q.col(b);
+    p = s.p.col(b);
+    sys.chart().velocity(q, p, sys.mass(b), v);
+    V.col(b) = v;
+  }
+  return V;
+}
+
+/// The momentum map as a vector (see the file comment for the layout).
+template <class Sys>
+Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, 1> momentum_map(
+    const Sys& sys, const State<typename Sys::Chart>& s) {
+  using Chart = typename Sys::Chart;
+  using Scalar = typename Sys::Scalar;
+  const auto X = embedding_points(sys, s);
+  const auto V = embedding_velocities(sys, s);
+  const int a = sys.ambient_dim();
+  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> out =
+      Eigen::Matrix<Scalar, Eigen::Dynamic, 1>::Zero(momentum_map_size(sys.chart()));
+  int k = 0;
+  if constexpr (has_translations<Chart>) {
+    for (int b = 0; b < sys.bodies(); ++b) out.head(a) += sys.mass(b) * V.col(b);
+    k = a;
+  }
+  for (int r = 0; r < a; ++r) {
+    for (int c = r + 1; c < a; ++c, ++k) {
+      for (int b = 0; b < sys.bodies(); ++b) {
+        out[k] += sys.mass(b) * (X(r, b) * V(c, b) - V(r, b) * X(c, b));
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace sesi

@@ -1,0 +1,204 @@
+#pragma once
+/// @file potentials.hpp
+/// Potential terms. Terms see embedding points only, so each is written once for every chart;
+/// the system pulls their ambient gradients back to chart coordinates.
+///
+/// Two kinds, told apart by the concepts below:
+///  - an external term V(x) per body: value(space, x, m) and gradient(space, x, m, g) = dV/dx;
+///  - a pair term W(d_ij) over unordered pairs i < j, of the geodesic distance or of the chord
+///    |x_i - x_j|: value(space, d, m_i, m_j) and derivative(space, d, m_i, m_j) = dW/dd.
+/// A user term is any small type with those members, or a pair of lambdas wrapped by
+/// make_external / make_pair.
+
+#include <cmath>
+#include <concepts>
+#include <utility>
+
+#include "sesi/chart.hpp"
+#include "sesi/special_functions.hpp"
+
+namespace sesi {
+
+/// Pair terms declare which distance they are a function of.
+struct geodesic_distance {};
+struct chord_distance {};
+
+template <class T, class Space>
+concept ExternalTerm = EmbeddedChart<Space> &&
+    requires(const T& t, const Space& s, const typename Space::Ambient& x,
+             typename Space::Scalar m, typename Space::Ambient& g) {
+      { t.value(s, x, m) } -> std::convertible_to<typename Space::Scalar>;
+      t.gradient(s, x, m, g);
+    };
+
+template <class T, class Space>
+concept PairTerm = EmbeddedChart<Space> &&
+    requires(const T& t, const Space& s, typename Space::Scalar d, typename Space::Scalar m) {
+      typename T::distance_kind;
+      { t.value(s, d, m, m) } -> std::convertible_to<typename Space::Scalar>;
+      { t.derivative(s, d, m, m) } -> std::convertible_to<typename Space::Scalar>;
+    };
+
+template <class T>
+constexpr bool is_chord_term = std::same_as<typename T::distance_kind, chord_distance>;
+
+namespace detail {
+template <class Space>
+typename Space::Scalar radius_or_one(const Space& s) {
+  if constexpr (requires { s.radius(); }) {
+    return s.radius();
+  } else {
+    return typename Space::Scalar(1);
+  }
+}
+}  // namespace detail
+
+/// The seed paper's pair term (eq. 11 and Suppl. "Finding an explicit solution"):
+/// W(s) = ((sqrt(1 - s^2) - cos theta0) / s)^2 with s = chord / (sqrt(3) R) = 2 sin(L/2R)/sqrt(3),
+/// energy = strength * W per unordered pair. The seed sums over ordered pairs: strength = 2.
+template <class Scalar>
+struct ChordWell {
+  using distance_kind = chord_distance;
+  Scalar theta0;
+  Scalar strength = Scalar(2);
+
+  template <class Space>
+  Scalar value(const Space& space, Scalar chord, Scalar, Scalar) const {
+    using std::cos;
+    using std::sqrt;
+    const Scalar s = chord / (sqrt(Scalar(3)) * detail::radius_or_one(space));
+    const Scalar w = (sqrt(Scalar(1) - s * s) - cos(theta0)) / s;
+    return strength * w * w;
+  }
+  /// dW/ds = 2 (a - c0)(c0 - 1/a) / s^3 with a = sqrt(1 - s^2), c0 = cos theta0.
+  template <class Space>
+  Scalar derivative(const Space& space, Scalar chord, Scalar, Scalar) const {
+    using std::cos;
+    using std::sqrt;
+    const Scalar scale = Scalar(1) / (sqrt(Scalar(3)) * detail::radius_or_one(space));
+    const Scalar s = chord * scale;
+    const Scalar a = sqrt(Scalar(1) - s * s), c0 = cos(theta0);
+    return strength * Scalar(2) * (a - c0) * (c0 - Scalar(1) / a) / (s * s * s) * scale;
+  }
+};
+
+/// The curved N-body problem (Diacu, Perez-Chavela, Santoprete): V = -G sum_{i<j} m_i m_j ctn(d_ij),
+/// ctn = cot(d/R)/R on S^n, coth(d/R)/R on H^n, 1/d on E^n (special_functions.hpp).
+template <class Scalar>
+struct CotangentGravity {
+  using distance_kind = geodesic_distance;
+  Scalar G = Scalar(1);
+
+  template <class Space>
+  Scalar value(const Space& space, Scalar d, Scalar mi, Scalar mj) const {
+    return -G * mi * mj * special::ctn(space.curvature(), d);
+  }
+  template <class Space>
+  Scalar derivative(const Space& space, Scalar d, Scalar mi, Scalar mj) const {
+    return -G * mi * mj * special::ctn_derivative(space.curvature(), d);
+  }
+};
+
+/// Harmonic spring on the geodesic distance: k/2 (d - d0)^2 per pair.
+template <class Scalar>
+struct HarmonicPair {
+  using distance_kind = geodesic_distance;
+  Scalar k = Scalar(1);
+  Scalar d0 = Scalar(0);
+
+  template <class Space>
+  Scalar value(const Space&, Scalar d, Scalar, Scalar) const {
+    return k / Scalar(2) * (d - d0) * (d - d0);
+  }
+  template <class Space>
+  Scalar derivative(const Space&, Scalar d, Scalar, Scalar) const {
+    return k * (d - d0);
+  }
+};
+
+/// Lennard-Jones on the geodesic distance, 4 eps ((sigma/d)^12 - (sigma/d)^6), shifted to zero at
+/// the cutoff and zero beyond it (truncated and shifted, Allen & Tildesley, 2nd ed., sec. 1.4.3).
+template <class Scalar>
+struct LennardJones {
+  using distance_kind = geodesic_distance;
+  Scalar epsilon = Scalar(1);
+  Scalar sigma = Scalar(1);
+  Scalar cutoff = Scalar(2.5);
+
+  Scalar raw(Scalar d) const {
+    const Scalar s2 = sigma * sigma / (d * d);
+    const Scalar s6 = s2 * s2 * s2;
+    return Scalar(4) * epsilon * (s6 * s6 - s6);
+  }
+  template <class Space>
+  Scalar value(const Space&, Scalar d, Scalar, Scalar) const {
+    return d < cutoff ? raw(d) - raw(cutoff) : Scalar(0);
+  }
+  template <class Space>
+  Scalar derivative(const Space&, Scalar d, Scalar, Scalar) const {
+    if (!(d < cutoff)) return Scalar(0);
+    const Scalar s2 = sigma * sigma / (d * d);
+    const Scalar s6 = s2 * s2 * s2;
+    return Scalar(-24) * epsilon * (Scalar(2) * s6 * s6 - s6) / d;
+  }
+};
+
+/// The curved Kepler problem: V = -k m ctn(d(x, center)) (Kozlov & Harin; Cariñena et al.).
+template <class Space>
+struct CentralCotangent {
+  using Scalar = typename Space::Scalar;
+  Scalar k = Scalar(1);
+  typename Space::Ambient center;
+
+  Scalar value(const Space& space, const typename Space::Ambient& x, Scalar m) const {
+    return -k * m * special::ctn(space.curvature(), space.distance(x, center));
+  }
+  void gradient(const Space& space, const typename Space::Ambient& x, Scalar m,
+                typename Space::Ambient& g) const {
+    const Scalar d = space.distance(x, center);
+    space.distance_gradient(x, center, g);
+    g *= -k * m * special::ctn_derivative(space.curvature(), d);
+  }
+};
+
+/// A user external term from two callables: value(x, m) -> Scalar, gradient(x, m) -> Ambient.
+template <class Value, class Gradient>
+struct External {
+  Value value_fn;
+  Gradient gradient_fn;
+  template <class Space>
+  auto value(const Space&, const typename Space::Ambient& x, typename Space::Scalar m) const {
+    return value_fn(x, m);
+  }
+  template <class Space>
+  void gradient(const Space&, const typename Space::Ambient& x, typename Space::Scalar m,
+                typename Space::Ambient& g) const {
+    g = gradient_fn(x, m);
+  }
+};
+template <class Value, class Gradient>
+External<Value, Gradient> make_external(Value v, Gradient g) {
+  return {std::move(v), std::move(g)};
+}
+
+/// A user pair term from two callables of (d, m_i, m_j): W and dW/dd, on the distance Kind.
+template <class Kind, class Value, class Derivative>
+struct Pair {
+  using distance_kind = Kind;
+  Value value_fn;
+  Derivative derivative_fn;
+  template <class Space, class Scalar>
+  Scalar value(const Space&, Scalar d, Scalar mi, Scalar mj) const {
+    return value_fn(d, mi, mj);
+  }
+  template <class Space, class Scalar>
+  Scalar derivative(const Space&, Scalar d, Scalar mi, Scalar mj) const {
+    return derivative_fn(d, mi, mj);
+  }
+};
+template <class Kind = geodesic_distance, class Value, class Derivative>
+Pair<Kind, Value, Derivative> make_pair(Value v, Derivative d) {
+  return {std::move(v), std::move(d)};
+}
+
+}  // namespace sesi

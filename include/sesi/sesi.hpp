@@ -1,0 +1,16 @@
+#pragma once
+/// @file sesi.hpp
+/// Everything of the core library (Eigen only). The odeint interoperation is sesi/odeint.hpp.
+
+#include "sesi/chart.hpp"
+#include "sesi/coefficients.hpp"
+#include "sesi/config.hpp"
+#include "sesi/diagnostics.hpp"
+#include "sesi/potentials.hpp"
+#include "sesi/spaces/euclidean.hpp"
+#include "sesi/spaces/hyperbolic.hpp"
+#include "sesi/spaces/sphere.hpp"
+#include "sesi/special_functions.hpp"
+#include "sesi/state.hpp"
+#include "sesi/stepper.hpp"
+#include "sesi/system.hpp"

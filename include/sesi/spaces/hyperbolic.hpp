@@ -1,0 +1,177 @@
+#pragma once
+/// @file hyperbolic.hpp
+/// Hyperbolic space H^n of radius R (curvature -1/R^2) in geodesic polar coordinates (issue #2).
+///
+/// Metric R^2 (dq_1^2 + sinh^2 q_1 dOmega_{n-1}^2), where dOmega is the hyperspherical metric of
+/// sphere.hpp in q_2..q_n. Levels: K_1 = p_1^2 / (2 m R^2),
+/// K_i = p_i^2 / (2 m R^2 sinh^2 q_1 prod_{1<k<i} sin^2 q_k) for i >= 2.
+/// Embedding in the hyperboloid <x,x> = -R^2 of Minkowski space R^{n,1}, time-like coordinate
+/// last: x = R (sinh q_1 u_{n-1}(q_2..q_n), cosh q_1), u_0 = (1), and
+/// <x,y> = x_1 y_1 + ... + x_n y_n - x_{n+1} y_{n+1}.
+/// Chart domain: n = 1, q_1 any real; n >= 2, q_1 >= 0, q_2..q_{n-1} in [0, pi], q_n any angle.
+/// Invariant: <x,x> = -R^2 with x_{n+1} > 0.
+
+#include <cmath>
+#include <Eigen/Core>
+
+#include "sesi/chart.hpp"
+#include "sesi/config.hpp"
+#include "sesi/spaces/hyperspherical.hpp"
+#include "sesi/special_functions.hpp"
+
+namespace sesi {
+
+/// Minkowski inner product with the time-like coordinate last.
+template <class A, class B>
+auto minkowski(const Eigen::MatrixBase<A>& x, const Eigen::MatrixBase<B>& y) {
+  const Eigen::Index n = x.size() - 1;
+  return x.head(n).dot(y.head(n)) - x[n] * y[n];
+}
+
+/// H^N of radius R. N may be Eigen::Dynamic (pass the dimension to the constructor).
+template <int N, class Scalar_ = double>
+class Hyperbolic {
+ public:
+  using Scalar = Scalar_;
+  static constexpr int dimension = N;
+  static constexpr int ambient_dimension = plus_one(N);
+  using Point = Eigen::Matrix<Scalar, N, 1>;
+  using Ambient = Eigen::Matrix<Scalar, ambient_dimension, 1>;
+  static constexpr const char* name = "hyperbolic";
+
+  explicit Hyperbolic(Scalar radius = Scalar(1), int dim = (N == Eigen::Dynamic ? 2 : N))
+      : radius_(radius), inv_r2_(Scalar(1) / (radius * radius)), dim_(dim) {
+    SESI_CHECK(radius > Scalar(0), "hyperbolic radius must be positive");
+    SESI_CHECK(dim >= 1 && (N == Eigen::Dynamic || dim == N), "hyperbolic dimension mismatch");
+  }
+
+  int dim() const { return dim_; }
+  int ambient_dim() const { return dim_ + 1; }
+  Scalar radius() const { return radius_; }
+  /// Sectional curvature -1/R^2.
+  Scalar curvature() const { return -inv_r2_; }
+
+  /// Inverse metric coefficient of level i: 1/R^2, then 1/(R^2 sinh^2 q_1 prod sin^2 q_k).
+  Scalar inverse_metric(int i, const Point& q) const {
+    Scalar g = inv_r2_;
+    if (i >= 1) g *= special::inv_sinh2(q[0]);
+    for (int k = 1; k < i; ++k) g *= special::inv_sin2(q[k]);
+    return g;
+  }
+
+  Scalar kinetic(int i, const Point& q, Scalar pi, Scalar m) const {
+    return pi * pi * inverse_metric(i, q) / (Scalar(2) * m);
+  }
+  Scalar kinetic_dp(int i, const Point& q, Scalar pi, Scalar m) const {
+    return pi * inverse_metric(i, q) / m;
+  }
+  /// dK_i/dq_1 = -2 coth(q_1) K_i, dK_i/dq_k = -2 cot(q_k) K_i for 1 < k < i.
+  Scalar kinetic_dq(int i, int k, const Point& q, Scalar pi, Scalar m) const {
+    if (k >= i) return Scalar(0);
+    const Scalar two_k = pi * pi * inverse_metric(i, q) / m;
+    return -two_k * (k == 0 ? special::coth(q[0]) : special::cot(q[k]));
+  }
+
+  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h) const {
+    const Scalar pi = p[i];
+    if (i == 0) {
+      q[0] += h * pi * inv_r2_ / m;
+      return;
+    }
+    const auto radial = special::inv_sinh2_coth(q[0]);
+    Scalar g = inv_r2_ * radial.inv_sin2;
+    for (int k = 1; k < i; ++k) g *= special::inv_sin2_cot(q[k]).inv_sin2;
+    const Scalar rate = h * pi * g / m;
+    const Scalar push = rate * pi;
+    p[0] += push * radial.cot;
+    for (int k = 1; k < i; ++k) p[k] += push * special::inv_sin2_cot(q[k]).cot;
+    q[i] += rate;
+  }
+
+  void embed(const Point& q, Ambient& x) const {
+    using std::cosh;
+    using std::sinh;
+    x.resize(ambient_dim());
+    x[dim_] = radius_ * cosh(q[0]);
+    detail::unit_sphere_embed(q, 1, dim_, radius_ * sinh(q[0]), x);
+  }
+  void pullback(const Point& q, const Ambient& g, Point& out) const {
+    using std::cosh;
+    using std::sinh;
+    out.resize(dim_);
+    const Scalar sh = sinh(q[0]), ch = cosh(q[0]);
+    // d/dq_1: R (cosh q_1 u . g_space + sinh q_1 g_time); angles: sphere part scaled by R sinh q_1.
+    auto& u = detail::TrigScratch<Scalar, ambient_dimension>::template buffer<3>(ambient_dim());
+    detail::unit_sphere_embed(q, 1, dim_, Scalar(1), u);
+    out[0] = radius_ * (ch * g.head(dim_).dot(u.head(dim_)) + sh * g[dim_]);
+    detail::unit_sphere_pullback<N>(q, 1, dim_, radius_ * sh, g, out);
+  }
+  void velocity(const Point& q, const Point& p, Scalar m, Ambient& v) const {
+    using std::cosh;
+    using std::sinh;
+    Point qd(dim_);
+    for (int i = 0; i < dim_; ++i) qd[i] = kinetic_dp(i, q, p[i], m);
+    v.resize(ambient_dim());
+    v[dim_] = radius_ * sinh(q[0]) * qd[0];
+    detail::unit_sphere_push(q, qd, 1, dim_, radius_ * sinh(q[0]), radius_ * cosh(q[0]) * qd[0], v);
+  }
+  /// Chart coordinates of a hyperboloid point.
+  void chart(const Ambient& x, Point& q) const {
+    using std::asinh;
+    q.resize(dim_);
+    if (dim_ == 1) {
+      q[0] = asinh(x[0] / radius_);
+      return;
+    }
+    q[0] = asinh(x.head(dim_).norm() / radius_);
+    detail::unit_sphere_angles(x, 1, dim_, q);
+  }
+  /// Conjugate momenta of a tangent velocity: p = m J^T eta v (the metric is J^T eta J).
+  void momentum(const Point& q, const Ambient& v, Scalar m, Point& p) const {
+    Ambient eta_v = v;
+    eta_v[dim_] = -v[dim_];
+    pullback(q, eta_v, p);
+    p *= m;
+  }
+
+  /// Constraint residual <x,x> + R^2 (zero on the space).
+  Scalar constraint(const Ambient& x) const { return minkowski(x, x) + radius_ * radius_; }
+  /// Tangency residual <x, v> (zero for v tangent at x).
+  Scalar tangency(const Ambient& x, const Ambient& v) const { return minkowski(x, v); }
+  /// Inner product of tangent vectors (Minkowski, positive on tangent vectors).
+  Scalar inner(const Ambient& u, const Ambient& v) const { return minkowski(u, v); }
+
+  /// Geodesic distance R acosh(-<x,y>/R^2), as 2 R asinh(|x - y|_L / 2R): accurate when small.
+  Scalar distance(const Ambient& x, const Ambient& y) const {
+    using std::asinh;
+    using std::sqrt;
+    const Ambient diff = x - y;
+    const Scalar chord2 = minkowski(diff, diff);  // space-like, >= 0 up to round-off
+    return Scalar(2) * radius_ * asinh(sqrt(chord2 > Scalar(0) ? chord2 : Scalar(0)) /
+                                       (Scalar(2) * radius_));
+  }
+  /// Euclidean gradient of the distance in x: -eta (b + <a,b> a) / sinh(d/R), a = x/R, b = y/R.
+  /// The added multiple of eta a is normal, so the pull-back is unchanged and the vector small.
+  void distance_gradient(const Ambient& x, const Ambient& y, Ambient& g) const {
+    using std::sinh;
+    const Scalar inv_r = Scalar(1) / radius_;
+    const Scalar ab = minkowski(x, y) * inv_r * inv_r;
+    g = -(y * inv_r + ab * inv_r * x);
+    g[dim_] = -g[dim_];
+    const Scalar sh = sinh(distance(x, y) * inv_r);
+    SESI_CHECK(sh > Scalar(0), "distance gradient at coincident points");
+    g /= sh;
+  }
+
+ private:
+  Scalar radius_;
+  Scalar inv_r2_;
+  int dim_;
+};
+
+using Hyperbolic1d = Hyperbolic<1, double>;
+using Hyperbolic2d = Hyperbolic<2, double>;
+using Hyperbolic3d = Hyperbolic<3, double>;
+using HyperbolicXd = Hyperbolic<Eigen::Dynamic, double>;
+
+}  // namespace sesi

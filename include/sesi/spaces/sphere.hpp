@@ -1,0 +1,135 @@
+#pragma once
+/// @file sphere.hpp
+/// The sphere S^n of radius R in hyperspherical angles (issue #2; seed paper, Discussion).
+///
+/// Metric R^2 (dq_1^2 + sin^2 q_1 dq_2^2 + sin^2 q_1 sin^2 q_2 dq_3^2 + ...), so for a body of
+/// mass m the kinetic energy splits into levels K_i = p_i^2 / (2 m R^2 prod_{k<i} sin^2 q_k).
+/// Embedding x = R u_n(q) with u_1(q) = (cos q, sin q), u_n = (sin q_1 u_{n-1}(q_2..), cos q_1);
+/// for n = 2 this is the seed's (sin th cos ph, sin th sin ph, cos th).
+/// Chart domain: q_1..q_{n-1} in [0, pi], q_n any angle. Invariant: |x| = R.
+
+#include <cmath>
+#include <Eigen/Core>
+
+#include "sesi/chart.hpp"
+#include "sesi/config.hpp"
+#include "sesi/spaces/hyperspherical.hpp"
+#include "sesi/special_functions.hpp"
+
+namespace sesi {
+
+/// S^N of radius R. N may be Eigen::Dynamic (pass the dimension to the constructor).
+template <int N, class Scalar_ = double>
+class Sphere {
+ public:
+  using Scalar = Scalar_;
+  static constexpr int dimension = N;
+  static constexpr int ambient_dimension = plus_one(N);
+  using Point = Eigen::Matrix<Scalar, N, 1>;
+  using Ambient = Eigen::Matrix<Scalar, ambient_dimension, 1>;
+  static constexpr const char* name = "sphere";
+
+  explicit Sphere(Scalar radius = Scalar(1), int dim = (N == Eigen::Dynamic ? 2 : N))
+      : radius_(radius), inv_r2_(Scalar(1) / (radius * radius)), dim_(dim) {
+    SESI_CHECK(radius > Scalar(0), "sphere radius must be positive");
+    SESI_CHECK(dim >= 1 && (N == Eigen::Dynamic || dim == N), "sphere dimension mismatch");
+  }
+
+  int dim() const { return dim_; }
+  int ambient_dim() const { return dim_ + 1; }
+  Scalar radius() const { return radius_; }
+  /// Sectional curvature 1/R^2.
+  Scalar curvature() const { return inv_r2_; }
+
+  /// Inverse metric coefficient of level i: 1 / (R^2 prod_{k<i} sin^2 q_k).
+  Scalar inverse_metric(int i, const Point& q) const {
+    Scalar g = inv_r2_;
+    for (int k = 0; k < i; ++k) g *= special::inv_sin2(q[k]);
+    return g;
+  }
+
+  Scalar kinetic(int i, const Point& q, Scalar pi, Scalar m) const {
+    return pi * pi * inverse_metric(i, q) / (Scalar(2) * m);
+  }
+  Scalar kinetic_dp(int i, const Point& q, Scalar pi, Scalar m) const {
+    return pi * inverse_metric(i, q) / m;
+  }
+  /// dK_i/dq_k = -2 cot(q_k) K_i for k < i.
+  Scalar kinetic_dq(int i, int k, const Point& q, Scalar pi, Scalar m) const {
+    if (k >= i) return Scalar(0);
+    return -pi * pi * inverse_metric(i, q) * special::cot(q[k]) / m;
+  }
+
+  /// Exact flow of K_i for time h: one sine and cosine per lower level.
+  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h) const {
+    Scalar g = inv_r2_;
+    for (int k = 0; k < i; ++k) g *= special::inv_sin2_cot(q[k]).inv_sin2;
+    const Scalar pi = p[i];
+    const Scalar rate = h * pi * g / m;  // h dK_i/dp_i
+    if (i > 0) {
+      const Scalar push = rate * pi;  // h * 2 K_i
+      for (int k = 0; k < i; ++k) p[k] += push * special::inv_sin2_cot(q[k]).cot;
+    }
+    q[i] += rate;
+  }
+
+  void embed(const Point& q, Ambient& x) const {
+    x.resize(ambient_dim());
+    detail::unit_sphere_embed(q, 0, dim_, radius_, x);
+  }
+  void pullback(const Point& q, const Ambient& g, Point& out) const {
+    out.resize(dim_);
+    detail::unit_sphere_pullback<N>(q, 0, dim_, radius_, g, out);
+  }
+  /// Embedding velocity v = J(q) qdot with qdot_i = dK_i/dp_i.
+  void velocity(const Point& q, const Point& p, Scalar m, Ambient& v) const {
+    Point qd(dim_);
+    for (int i = 0; i < dim_; ++i) qd[i] = kinetic_dp(i, q, p[i], m);
+    v.resize(ambient_dim());
+    detail::unit_sphere_push(q, qd, 0, dim_, radius_, Scalar(0), v);
+  }
+  /// Chart coordinates of an embedding point (|x| = R).
+  void chart(const Ambient& x, Point& q) const {
+    q.resize(dim_);
+    detail::unit_sphere_angles(x, 0, dim_, q);
+  }
+  /// Conjugate momenta of an embedding velocity tangent at x = embed(q): p = m J^T v.
+  void momentum(const Point& q, const Ambient& v, Scalar m, Point& p) const {
+    pullback(q, v, p);
+    p *= m;
+  }
+
+  /// Constraint residual |x|^2 - R^2 (zero on the space).
+  Scalar constraint(const Ambient& x) const { return x.squaredNorm() - radius_ * radius_; }
+  /// Tangency residual x . v (zero for v tangent at x).
+  Scalar tangency(const Ambient& x, const Ambient& v) const { return x.dot(v); }
+  /// Inner product of two tangent vectors (Euclidean on the sphere).
+  Scalar inner(const Ambient& u, const Ambient& v) const { return u.dot(v); }
+
+  /// Geodesic distance R * angle, as 2 R atan2(|x - y|, |x + y|): accurate at all angles.
+  Scalar distance(const Ambient& x, const Ambient& y) const {
+    using std::atan2;
+    return Scalar(2) * radius_ * atan2((x - y).norm(), (x + y).norm());
+  }
+  /// Gradient of the distance in x, tangent at x: -(b - (a.b) a) / |b - (a.b) a|, a = x/R, b = y/R.
+  void distance_gradient(const Ambient& x, const Ambient& y, Ambient& g) const {
+    const Scalar inv_r = Scalar(1) / radius_;
+    g = -(y * inv_r - (x.dot(y) * inv_r * inv_r * inv_r) * x);
+    const Scalar norm = g.norm();
+    SESI_CHECK(norm > Scalar(0), "distance gradient at coincident or antipodal points");
+    g /= norm;
+  }
+
+ private:
+  Scalar radius_;
+  Scalar inv_r2_;
+  int dim_;
+};
+
+using Sphere1d = Sphere<1, double>;
+using Sphere2d = Sphere<2, double>;
+using Sphere3d = Sphere<3, double>;
+using Sphere2f = Sphere<2, float>;
+using SphereXd = Sphere<Eigen::Dynamic, double>;
+
+}  // namespace sesi

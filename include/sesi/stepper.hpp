@@ -1,0 +1,169 @@
+#pragma once
+/// @file stepper.hpp
+/// One composition engine over coefficient tables (coefficients.hpp).
+///
+/// The base step is the seed's hierarchical Strang splitting (seed paper, eqs. 6-8 and
+/// Discussion): half flows of K_1..K_n, the full potential kick, half flows of K_n..K_1. Each
+/// flow is exact and explicit (chart.hpp), so every composition is explicit, symplectic and,
+/// being palindromic, time-reversible. Where two stages meet, their K_1 half flows are fused into
+/// one (K_1 depends on p_1 alone, so its flows compose exactly).
+///
+/// Steppers model odeint's Stepper concept (order(), do_step(sys, x, t, dt), the usual types);
+/// sesi/odeint.hpp adds the stepper_category tag so that integrate_const drives them.
+
+#include <array>
+#include <functional>
+#include <type_traits>
+
+#include "sesi/chart.hpp"
+#include "sesi/coefficients.hpp"
+#include "sesi/state.hpp"
+#include "sesi/system.hpp"
+
+namespace sesi {
+
+/// Which form of the base step: drift-kick-drift (the seed's; kinetic half flows outside) or
+/// kick-drift-kick (potential half kicks outside; on E^n this is velocity Verlet).
+enum class Splitting { drift_kick_drift, kick_drift_kick };
+
+namespace detail {
+template <class T>
+struct unwrap {
+  using type = T;
+  static T& get(T& t) { return t; }
+};
+template <class T>
+struct unwrap<std::reference_wrapper<T>> {
+  using type = T;
+  static T& get(std::reference_wrapper<T> t) { return t.get(); }
+};
+}  // namespace detail
+
+template <class Table, HierarchicalChart Chart,
+          Splitting Form = Splitting::drift_kick_drift>
+class Composition {
+ public:
+  using Scalar = typename Chart::Scalar;
+  using state_type = State<Chart>;
+  using deriv_type = State<Chart>;
+  using value_type = Scalar;
+  using time_type = Scalar;
+  using order_type = unsigned short;
+  using table = Table;
+
+  static constexpr order_type order_value = Table::order;
+  static constexpr order_type order() { return Table::order; }
+  static constexpr std::size_t stages() { return Table::stages; }
+
+  Composition() : w_(Table::template weights<Scalar>()) {}
+
+  const std::array<Scalar, Table::stages>& weights() const { return w_; }
+
+  /// Advance x from t to t + dt in place (odeint's do_step(sys, x, t, dt)).
+  template <class Sys>
+  void do_step(Sys&& system, state_type& x, time_type /*t*/, time_type dt) {
+    using Raw = std::remove_cvref_t<Sys>;
+    const auto& sys = detail::unwrap<Raw>::get(system);
+    ws_.resize(sys.dim(), sys.ambient_dim(), sys.bodies());
+    if constexpr (Form == Splitting::drift_kick_drift) {
+      step_dkd(sys, x, dt);
+    } else {
+      step_kdk(sys, x, dt);
+    }
+  }
+
+ private:
+  /// Forward level flows on every body: level 0 for time h0, levels 1..n-1 for time h.
+  template <class Sys>
+  void forward(const Sys& sys, state_type& x, Scalar h0, Scalar h, int last_level) {
+    const auto& chart = sys.chart();
+    for (int b = 0; b < sys.bodies(); ++b) {
+      ws_.q = x.q.col(b);
+      ws_.p = x.p.col(b);
+      const Scalar m = sys.mass(b);
+      if (h0 != Scalar(0)) level_flow(chart, 0, ws_.q, ws_.p, m, h0);
+      for (int i = 1; i <= last_level; ++i) level_flow(chart, i, ws_.q, ws_.p, m, h);
+      x.q.col(b) = ws_.q;
+      x.p.col(b) = ws_.p;
+    }
+  }
+  /// Backward level flows on every body: levels from_level..1 for time h, then level 0 for h0.
+  template <class Sys>
+  void backward(const Sys& sys, state_type& x, Scalar h, Scalar h0, int from_level) {
+    const auto& chart = sys.chart();
+    for (int b = 0; b < sys.bodies(); ++b) {
+      ws_.q = x.q.col(b);
+      ws_.p = x.p.col(b);
+      const Scalar m = sys.mass(b);
+      for (int i = from_level; i >= 1; --i) level_flow(chart, i, ws_.q, ws_.p, m, h);
+      if (h0 != Scalar(0)) level_flow(chart, 0, ws_.q, ws_.p, m, h0);
+      x.q.col(b) = ws_.q;
+      x.p.col(b) = ws_.p;
+    }
+  }
+
+  template <class Sys>
+  void step_dkd(const Sys& sys, state_type& x, Scalar dt) {
+    const int top = sys.dim() - 1;
+    const std::size_t s = Table::stages;
+    Scalar pending = w_[0] * dt / Scalar(2);  // level-0 flow carried over from the last stage
+    for (std::size_t k = 0; k < s; ++k) {
+      const Scalar half = w_[k] * dt / Scalar(2);
+      forward(sys, x, pending, half, top);
+      sys.kick(x, w_[k] * dt, ws_);
+      // Levels n-1..1 now; level 0 is fused with the next stage's first half flow.
+      pending = half + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
+      backward(sys, x, half, k + 1 < s ? Scalar(0) : pending, top);
+    }
+  }
+
+  template <class Sys>
+  void step_kdk(const Sys& sys, state_type& x, Scalar dt) {
+    const int top = sys.dim() - 1;
+    const std::size_t s = Table::stages;
+    Scalar pending = w_[0] * dt / Scalar(2);  // half kick carried over from the last stage
+    for (std::size_t k = 0; k < s; ++k) {
+      const Scalar h = w_[k] * dt;
+      sys.kick(x, pending, ws_);
+      // Kinetic part: K_1(h/2)..K_{n-1}(h/2) K_n(h) K_{n-1}(h/2)..K_1(h/2).
+      if (top == 0) {
+        forward(sys, x, h, h, 0);
+      } else {
+        forward(sys, x, h / Scalar(2), h / Scalar(2), top - 1);
+        for (int b = 0; b < sys.bodies(); ++b) {
+          ws_.q = x.q.col(b);
+          ws_.p = x.p.col(b);
+          level_flow(sys.chart(), top, ws_.q, ws_.p, sys.mass(b), h);
+          x.q.col(b) = ws_.q;
+          x.p.col(b) = ws_.p;
+        }
+        backward(sys, x, h / Scalar(2), h / Scalar(2), top - 1);
+      }
+      pending = h / Scalar(2) + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
+    }
+    sys.kick(x, pending, ws_);
+  }
+
+  std::array<Scalar, Table::stages> w_;
+  Workspace<Chart> ws_;
+};
+
+/// The named methods (names as in the sesi program).
+template <class Chart>
+using Strang = Composition<coefficients::Strang, Chart>;
+template <class Chart>
+using Yoshida4 = Composition<coefficients::Yoshida4, Chart>;
+template <class Chart>
+using Suzuki4 = Composition<coefficients::Suzuki4, Chart>;
+template <class Chart>
+using McLachlan4 = Composition<coefficients::McLachlan4, Chart>;
+template <class Chart>
+using Yoshida6 = Composition<coefficients::Yoshida6, Chart>;
+template <class Chart>
+using KahanLi6 = Composition<coefficients::KahanLi6, Chart>;
+template <class Chart>
+using McLachlan8 = Composition<coefficients::McLachlan8, Chart>;
+template <class Chart>
+using KahanLi8 = Composition<coefficients::KahanLi8, Chart>;
+
+}  // namespace sesi

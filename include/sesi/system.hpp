@@ -1,0 +1,247 @@
+#pragma once
+/// @file system.hpp
+/// A Hamiltonian system: bodies (masses) on one chart, plus potential terms.
+/// H = sum_b sum_i K_i(q_b, p_b; m_b) + sum of the terms on the embedding points x_b = embed(q_b).
+/// Only what the system has is compiled into its step: without terms there is no kick at all,
+/// and a pair loop exists only for pair terms.
+
+#include <tuple>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sesi/chart.hpp"
+#include "sesi/config.hpp"
+#include "sesi/potentials.hpp"
+#include "sesi/state.hpp"
+
+namespace sesi {
+
+namespace detail {
+template <class Chart>
+constexpr int ambient_dimension_of() {
+  if constexpr (requires { Chart::ambient_dimension; }) {
+    return Chart::ambient_dimension;
+  } else {
+    return Chart::dimension;
+  }
+}
+}  // namespace detail
+
+/// Scratch space of a step for one chart type, sized once (steppers own one, so a step
+/// allocates nothing).
+template <HierarchicalChart Chart>
+struct Workspace {
+  using Scalar = typename Chart::Scalar;
+  static constexpr int ambient_dimension = detail::ambient_dimension_of<Chart>();
+  using Point = typename Chart::Point;
+  using AmbientVector = Eigen::Matrix<Scalar, ambient_dimension, 1>;
+  using AmbientMatrix = Eigen::Matrix<Scalar, ambient_dimension, Eigen::Dynamic>;
+
+  Point q, p;            // one body's coordinates and momenta
+  AmbientVector x, y, g; // one body's (or pair's) ambient points and gradient
+  AmbientMatrix X, G;    // all bodies' embedding points and potential gradients
+
+  void resize(int dim, int ambient, int bodies) {
+    if (X.cols() != bodies || X.rows() != ambient) {
+      X.resize(ambient, bodies);
+      G.resize(ambient, bodies);
+    }
+    if (q.size() != dim) {
+      q.resize(dim);
+      p.resize(dim);
+    }
+    if (x.size() != ambient) {
+      x.resize(ambient);
+      y.resize(ambient);
+      g.resize(ambient);
+    }
+  }
+};
+
+template <HierarchicalChart Chart_, class... Terms>
+class System {
+ public:
+  using Chart = Chart_;
+  using Scalar = typename Chart::Scalar;
+  using Point = typename Chart::Point;
+  using StateType = State<Chart>;
+  static constexpr int ambient_dimension = detail::ambient_dimension_of<Chart>();
+
+  static constexpr bool has_potential = sizeof...(Terms) > 0;
+  static_assert(!has_potential || EmbeddedChart<Chart>,
+                "potential terms act on embedding points: the chart must model EmbeddedChart");
+
+  using Workspace = sesi::Workspace<Chart>;
+
+  System(Chart chart, std::vector<Scalar> masses, Terms... terms)
+      : chart_(std::move(chart)), masses_(std::move(masses)), terms_(std::move(terms)...) {
+    for ([[maybe_unused]] Scalar m : masses_) SESI_CHECK(m > Scalar(0), "masses must be positive");
+  }
+
+  const Chart& chart() const { return chart_; }
+  const std::vector<Scalar>& masses() const { return masses_; }
+  Scalar mass(int b) const { return masses_[static_cast<std::size_t>(b)]; }
+  int bodies() const { return static_cast<int>(masses_.size()); }
+  int dim() const { return chart_.dim(); }
+  const std::tuple<Terms...>& terms() const { return terms_; }
+
+  Workspace make_workspace() const {
+    Workspace w;
+    w.resize(dim(), ambient_dim(), bodies());
+    return w;
+  }
+  int ambient_dim() const {
+    if constexpr (EmbeddedChart<Chart>) {
+      return chart_.ambient_dim();
+    } else {
+      return chart_.dim();
+    }
+  }
+
+  Scalar kinetic_energy(const StateType& s) const {
+    Scalar k(0);
+    Point q(dim()), p(dim());
+    for (int b = 0; b < bodies(); ++b) {
+      q = s.q.col(b);
+      p = s.p.col(b);
+      k += sesi::kinetic_energy(chart_, q, p, mass(b));
+    }
+    return k;
+  }
+
+  /// Embedding points of all bodies into w.X.
+  void embed_all(const StateType& s, Workspace& w) const {
+    for (int b = 0; b < bodies(); ++b) {
+      w.q = s.q.col(b);
+      chart_.embed(w.q, w.x);
+      w.X.col(b) = w.x;
+    }
+  }
+
+  Scalar potential_energy(const StateType& s, Workspace& w) const {
+    if constexpr (!has_potential) {
+      return Scalar(0);
+    } else {
+      w.resize(dim(), ambient_dim(), bodies());
+      embed_all(s, w);
+      Scalar v(0);
+      std::apply([&](const auto&... term) { ((v += term_energy(term, w)), ...); }, terms_);
+      return v;
+    }
+  }
+  Scalar potential_energy(const StateType& s) const {
+    Workspace w = make_workspace();
+    return potential_energy(s, w);
+  }
+  Scalar energy(const StateType& s, Workspace& w) const {
+    return kinetic_energy(s) + potential_energy(s, w);
+  }
+  Scalar energy(const StateType& s) const {
+    Workspace w = make_workspace();
+    return energy(s, w);
+  }
+
+  /// Ambient gradients of the potential for all bodies into w.G (w.X must hold the points).
+  void ambient_gradient(Workspace& w) const {
+    w.G.setZero();
+    std::apply([&](const auto&... term) { (add_term_gradient(term, w), ...); }, terms_);
+  }
+
+  /// The potential kick: p -= h dV/dq, with dV/dq = J(q)^T dV/dx per body.
+  void kick(StateType& s, Scalar h, Workspace& w) const {
+    if constexpr (has_potential) {
+      embed_all(s, w);
+      ambient_gradient(w);
+      for (int b = 0; b < bodies(); ++b) {
+        w.q = s.q.col(b);
+        w.g = w.G.col(b);
+        chart_.pullback(w.q, w.g, w.p);
+        s.p.col(b) -= h * w.p;
+      }
+    }
+  }
+
+  /// Chart gradient dV/dq of all bodies (dim x bodies), for reference methods and tests.
+  void potential_gradient(const StateType& s, Workspace& w,
+                          typename StateType::Matrix& out) const {
+    out.setZero(dim(), bodies());
+    if constexpr (has_potential) {
+      embed_all(s, w);
+      ambient_gradient(w);
+      for (int b = 0; b < bodies(); ++b) {
+        w.q = s.q.col(b);
+        w.g = w.G.col(b);
+        chart_.pullback(w.q, w.g, w.p);
+        out.col(b) = w.p;
+      }
+    }
+  }
+
+ private:
+  template <class Term>
+  Scalar term_energy(const Term& term, Workspace& w) const {
+    Scalar v(0);
+    if constexpr (PairTerm<Term, Chart>) {
+      for (int i = 0; i < bodies(); ++i) {
+        w.x = w.X.col(i);
+        for (int j = i + 1; j < bodies(); ++j) {
+          w.y = w.X.col(j);
+          const Scalar d = is_chord_term<Term> ? (w.x - w.y).norm() : chart_.distance(w.x, w.y);
+          v += term.value(chart_, d, mass(i), mass(j));
+        }
+      }
+    } else {
+      static_assert(ExternalTerm<Term, Chart>, "a term must model ExternalTerm or PairTerm");
+      for (int b = 0; b < bodies(); ++b) {
+        w.x = w.X.col(b);
+        v += term.value(chart_, w.x, mass(b));
+      }
+    }
+    return v;
+  }
+
+  template <class Term>
+  void add_term_gradient(const Term& term, Workspace& w) const {
+    if constexpr (PairTerm<Term, Chart>) {
+      for (int i = 0; i < bodies(); ++i) {
+        w.x = w.X.col(i);
+        for (int j = i + 1; j < bodies(); ++j) {
+          w.y = w.X.col(j);
+          if constexpr (is_chord_term<Term>) {
+            w.g = w.x - w.y;
+            const Scalar d = w.g.norm();
+            w.g *= term.derivative(chart_, d, mass(i), mass(j)) / d;
+            w.G.col(i) += w.g;
+            w.G.col(j) -= w.g;
+          } else {
+            const Scalar d = chart_.distance(w.x, w.y);
+            const Scalar dw = term.derivative(chart_, d, mass(i), mass(j));
+            chart_.distance_gradient(w.x, w.y, w.g);
+            w.G.col(i) += dw * w.g;
+            chart_.distance_gradient(w.y, w.x, w.g);
+            w.G.col(j) += dw * w.g;
+          }
+        }
+      }
+    } else {
+      for (int b = 0; b < bodies(); ++b) {
+        w.x = w.X.col(b);
+        term.gradient(chart_, w.x, mass(b), w.g);
+        w.G.col(b) += w.g;
+      }
+    }
+  }
+
+  Chart chart_;
+  std::vector<Scalar> masses_;
+  std::tuple<Terms...> terms_;
+};
+
+/// Deduction guide: System(chart, masses, terms...).
+template <class Chart, class... Terms>
+System(Chart, std::vector<typename Chart::Scalar>, Terms...) -> System<Chart, Terms...>;
+
+}  // namespace sesi
