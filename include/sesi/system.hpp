@@ -44,6 +44,19 @@ struct Workspace {
   AmbientVector x, y, g; // one body's (or pair's) ambient points and gradient
   AmbientMatrix X, G;    // all bodies' embedding points and potential gradients
 
+  Workspace() {
+    // Fixed-size members start defined, so that copying a fresh stepper copies no garbage.
+    if constexpr (Chart::dimension != Eigen::Dynamic) {
+      q.setZero();
+      p.setZero();
+    }
+    if constexpr (ambient_dimension != Eigen::Dynamic) {
+      x.setZero();
+      y.setZero();
+      g.setZero();
+    }
+  }
+
   void resize(int dim, int ambient, int bodies) {
     if (X.cols() != bodies || X.rows() != ambient) {
       X.resize(ambient, bodies);

@@ -103,7 +103,9 @@ class Hyperbolic {
     // d/dq_1: R (cosh q_1 u . g_space + sinh q_1 g_time); angles: sphere part scaled by R sinh q_1.
     auto& u = detail::TrigScratch<Scalar, ambient_dimension>::template buffer<3>(ambient_dim());
     detail::unit_sphere_embed(q, 1, dim_, Scalar(1), u);
-    out[0] = radius_ * (ch * g.head(dim_).dot(u.head(dim_)) + sh * g[dim_]);
+    Scalar gu(0);
+    for (int a = 0; a < dim_; ++a) gu += g[a] * u[a];
+    out[0] = radius_ * (ch * gu + sh * g[dim_]);
     detail::unit_sphere_pullback<N>(q, 1, dim_, radius_ * sh, g, out);
   }
   void velocity(const Point& q, const Point& p, Scalar m, Ambient& v) const {
@@ -145,8 +147,7 @@ class Hyperbolic {
   Scalar distance(const Ambient& x, const Ambient& y) const {
     using std::asinh;
     using std::sqrt;
-    const Ambient diff = x - y;
-    const Scalar chord2 = minkowski(diff, diff);  // space-like, >= 0 up to round-off
+    const Scalar chord2 = minkowski(x - y, x - y);  // space-like, >= 0 up to round-off
     return Scalar(2) * radius_ * asinh(sqrt(chord2 > Scalar(0) ? chord2 : Scalar(0)) /
                                        (Scalar(2) * radius_));
   }
