@@ -12,6 +12,7 @@
 /// Invariant: <x,x> = -R^2 with x_{n+1} > 0.
 
 #include <cmath>
+#include <limits>
 #include <Eigen/Core>
 
 #include "sesi/chart.hpp"
@@ -94,6 +95,9 @@ class Hyperbolic {
     x.resize(ambient_dim());
     x[dim_] = radius_ * cosh(q[0]);
     detail::unit_sphere_embed(q, 1, dim_, radius_ * sinh(q[0]), x);
+    // Invariant <x,x> = -R^2, to round-off relative to x_{n+1}^2 (which grows like e^{2 q_1}).
+    SESI_CHECK(abs_of(constraint(x)) <= invariant_tolerance() * x[dim_] * x[dim_],
+               "embedding left the hyperboloid: <x,x> != -R^2");
   }
   void pullback(const Point& q, const Ambient& g, Point& out) const {
     using std::cosh;
@@ -165,6 +169,11 @@ class Hyperbolic {
   }
 
  private:
+  static Scalar abs_of(Scalar v) { return v < Scalar(0) ? -v : v; }
+  Scalar invariant_tolerance() const {
+    return Scalar(16 * (dim_ + 1)) * std::numeric_limits<Scalar>::epsilon();
+  }
+
   Scalar radius_;
   Scalar inv_r2_;
   int dim_;

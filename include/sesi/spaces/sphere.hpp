@@ -9,6 +9,7 @@
 /// Chart domain: q_1..q_{n-1} in [0, pi], q_n any angle. Invariant: |x| = R.
 
 #include <cmath>
+#include <limits>
 #include <Eigen/Core>
 
 #include "sesi/chart.hpp"
@@ -76,6 +77,9 @@ class Sphere {
   void embed(const Point& q, Ambient& x) const {
     x.resize(ambient_dim());
     detail::unit_sphere_embed(q, 0, dim_, radius_, x);
+    // Invariant |x| = R, to round-off of the n products that build x.
+    SESI_CHECK(abs_of(constraint(x)) <= invariant_tolerance() * radius_ * radius_,
+               "embedding left the sphere: |x| != R");
   }
   void pullback(const Point& q, const Ambient& g, Point& out) const {
     out.resize(dim_);
@@ -121,6 +125,11 @@ class Sphere {
   }
 
  private:
+  static Scalar abs_of(Scalar v) { return v < Scalar(0) ? -v : v; }
+  Scalar invariant_tolerance() const {
+    return Scalar(16 * (dim_ + 1)) * std::numeric_limits<Scalar>::epsilon();
+  }
+
   Scalar radius_;
   Scalar inv_r2_;
   int dim_;
