@@ -50,6 +50,19 @@ concept HasLevelFlow =
     requires(const C& c, typename C::Point& q, typename C::Point& p, typename C::Scalar m,
              typename C::Scalar h, int i) { c.level_flow(i, q, p, m, h); };
 
+/// A chart that caches the sines and cosines of a body's coordinates (TrigType), so that the
+/// level flows, the embedding and the pull-back of one stage share them (built-in S^n, H^n).
+template <class C>
+concept HasTrigCache =
+    EmbeddedChart<C> &&
+    requires(const C& c, typename C::Point& q, typename C::Point& p, typename C::TrigType& t,
+             typename C::Ambient& x, typename C::Scalar m, int i) {
+      c.refresh(q, t);                 // t = trig of q
+      c.level_flow(i, q, p, m, m, t);  // exact flow of K_i, t kept in sync with q
+      c.embed(t, x);
+      c.pullback(t, x, p);
+    };
+
 /// A space with a geodesic distance and constant curvature (needed by pair terms on the distance).
 template <class C>
 concept MetricSpace = EmbeddedChart<C> && requires(const C& c, const typename C::Ambient& x,

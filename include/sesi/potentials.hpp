@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <concepts>
+#include <numbers>
 #include <utility>
 
 #include "sesi/chart.hpp"
@@ -57,29 +58,43 @@ typename Space::Scalar radius_or_one(const Space& s) {
 /// W(s) = ((sqrt(1 - s^2) - cos theta0) / s)^2 with s = chord / (sqrt(3) R) = 2 sin(L/2R)/sqrt(3),
 /// energy = strength * W per unordered pair. The seed sums over ordered pairs: strength = 2.
 template <class Scalar>
-struct ChordWell {
+class ChordWell {
+ public:
   using distance_kind = chord_distance;
-  Scalar theta0;
-  Scalar strength = Scalar(2);
+
+  explicit ChordWell(Scalar theta0, Scalar strength = Scalar(2))
+      : theta0_(theta0), strength_(strength), cos_theta0_(std::cos(theta0)) {}
+
+  Scalar theta0() const { return theta0_; }
+  Scalar strength() const { return strength_; }
 
   template <class Space>
   Scalar value(const Space& space, Scalar chord, Scalar, Scalar) const {
-    using std::cos;
     using std::sqrt;
-    const Scalar s = chord / (sqrt(Scalar(3)) * detail::radius_or_one(space));
-    const Scalar w = (sqrt(Scalar(1) - s * s) - cos(theta0)) / s;
-    return strength * w * w;
+    const Scalar s = chord * scale(space);
+    const Scalar w = (sqrt(Scalar(1) - s * s) - cos_theta0_) / s;
+    return strength_ * w * w;
   }
   /// dW/ds = 2 (a - c0)(c0 - 1/a) / s^3 with a = sqrt(1 - s^2), c0 = cos theta0.
   template <class Space>
   Scalar derivative(const Space& space, Scalar chord, Scalar, Scalar) const {
-    using std::cos;
     using std::sqrt;
-    const Scalar scale = Scalar(1) / (sqrt(Scalar(3)) * detail::radius_or_one(space));
-    const Scalar s = chord * scale;
-    const Scalar a = sqrt(Scalar(1) - s * s), c0 = cos(theta0);
-    return strength * Scalar(2) * (a - c0) * (c0 - Scalar(1) / a) / (s * s * s) * scale;
+    const Scalar k = scale(space);
+    const Scalar s = chord * k;
+    const Scalar a = sqrt(Scalar(1) - s * s);
+    return strength_ * Scalar(2) * (a - cos_theta0_) * (cos_theta0_ - Scalar(1) / a) / (s * s * s) * k;
   }
+
+ private:
+  /// 1 / (sqrt(3) R): s = chord / (sqrt(3) R).
+  template <class Space>
+  static Scalar scale(const Space& space) {
+    return Scalar(1) / (std::numbers::sqrt3_v<Scalar> * detail::radius_or_one(space));
+  }
+
+  Scalar theta0_;
+  Scalar strength_;
+  Scalar cos_theta0_;
 };
 
 /// The curved N-body problem (Diacu, Perez-Chavela, Santoprete): V = -G sum_{i<j} m_i m_j ctn(d_ij),

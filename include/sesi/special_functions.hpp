@@ -73,31 +73,12 @@ Scalar cot(Scalar x) {
   return cos(x) / s;
 }
 
-/// 1/sin^2(x) and cot(x) from one sine and cosine (the pair every sphere level flow needs).
+/// 1/s for a cached sine (or sinh) s of a chart coordinate: singular at the chart's poles.
+/// Guard: checked non-zero in debug builds; pole-safe charts re-chart a body before it gets near.
 template <class Scalar>
-struct InvSin2Cot {
-  Scalar inv_sin2;
-  Scalar cot;
-};
-template <class Scalar>
-InvSin2Cot<Scalar> inv_sin2_cot(Scalar x) {
-  using std::cos;
-  using std::sin;
-  const Scalar s = sin(x);
-  SESI_CHECK(s != Scalar(0), "1/sin^2 and cot evaluated at a chart pole");
-  const Scalar inv = Scalar(1) / s;
-  return {inv * inv, cos(x) * inv};
-}
-
-/// 1/sinh^2(x) and coth(x) from one sinh and cosh.
-template <class Scalar>
-InvSin2Cot<Scalar> inv_sinh2_coth(Scalar x) {
-  using std::cosh;
-  using std::sinh;
-  const Scalar s = sinh(x);
-  SESI_CHECK(s != Scalar(0), "1/sinh^2 and coth evaluated at the hyperbolic chart origin");
-  const Scalar inv = Scalar(1) / s;
-  return {inv * inv, cosh(x) * inv};
+Scalar reciprocal_sine(Scalar s) {
+  SESI_CHECK(s != Scalar(0), "reciprocal of a vanishing sine: body at a chart pole");
+  return Scalar(1) / s;
 }
 
 /// coth(x) = cosh x / sinh x, singular at 0.

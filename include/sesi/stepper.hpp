@@ -64,42 +64,57 @@ class Composition {
   void do_step(Sys&& system, state_type& x, time_type /*t*/, time_type dt) {
     using Raw = std::remove_cvref_t<Sys>;
     const auto& sys = detail::unwrap<Raw>::get(system);
-    ws_.resize(sys.dim(), sys.ambient_dim(), sys.bodies());
+    // The trig caches left by the last step are valid if q is what that step produced.
+    if (!(last_q_.cols() == x.q.cols() && last_q_.rows() == x.q.rows() && last_q_ == x.q)) {
+      sys.refresh(x, ws_);  // sizes the workspace; one sine and cosine per coordinate
+    }
     if constexpr (Form == Splitting::drift_kick_drift) {
       step_dkd(sys, x, dt);
     } else {
       step_kdk(sys, x, dt);
     }
+    last_q_ = x.q;
   }
 
  private:
-  /// Forward level flows on every body: level 0 for time h0, levels 1..n-1 for time h.
-  template <class Sys>
-  void forward(const Sys& sys, state_type& x, Scalar h0, Scalar h, int last_level) {
-    const auto& chart = sys.chart();
+  /// The exact flow of level i for time h on body b, held in ws_.q, ws_.p (and its trig cache;
+  /// own_trig = false leaves level i's own entry stale, see step_dkd).
+  void flow(const Chart& chart, int b, int i, Scalar m, Scalar h, bool own_trig = true) {
+    if constexpr (HasTrigCache<Chart>) {
+      chart.level_flow(i, ws_.q, ws_.p, m, h, ws_.trig[static_cast<std::size_t>(b)], own_trig);
+    } else {
+      level_flow(chart, i, ws_.q, ws_.p, m, h);
+    }
+  }
+  /// Apply f(b, m) to every body b, loaded into ws_.q, ws_.p and stored back.
+  template <class Sys, class F>
+  void each_body(const Sys& sys, state_type& x, F&& f) {
     for (int b = 0; b < sys.bodies(); ++b) {
       ws_.q = x.q.col(b);
       ws_.p = x.p.col(b);
-      const Scalar m = sys.mass(b);
-      if (h0 != Scalar(0)) level_flow(chart, 0, ws_.q, ws_.p, m, h0);
-      for (int i = 1; i <= last_level; ++i) level_flow(chart, i, ws_.q, ws_.p, m, h);
+      f(b, sys.mass(b));
       x.q.col(b) = ws_.q;
       x.p.col(b) = ws_.p;
     }
   }
-  /// Backward level flows on every body: levels from_level..1 for time h, then level 0 for h0.
+  /// Forward level flows on every body: level 0 for time h0, levels 1..last for time h.
   template <class Sys>
-  void backward(const Sys& sys, state_type& x, Scalar h, Scalar h0, int from_level) {
-    const auto& chart = sys.chart();
-    for (int b = 0; b < sys.bodies(); ++b) {
-      ws_.q = x.q.col(b);
-      ws_.p = x.p.col(b);
-      const Scalar m = sys.mass(b);
-      for (int i = from_level; i >= 1; --i) level_flow(chart, i, ws_.q, ws_.p, m, h);
-      if (h0 != Scalar(0)) level_flow(chart, 0, ws_.q, ws_.p, m, h0);
-      x.q.col(b) = ws_.q;
-      x.p.col(b) = ws_.p;
-    }
+  void forward(const Sys& sys, state_type& x, Scalar h0, Scalar h, int last) {
+    each_body(sys, x, [&](int b, Scalar m) {
+      if (h0 != Scalar(0)) flow(sys.chart(), b, 0, m, h0);
+      for (int i = 1; i <= last; ++i) flow(sys.chart(), b, i, m, h);
+    });
+  }
+  /// Backward level flows on every body: levels from..1 for time h, then level 0 for time h0.
+  /// With stale_top, level `from` leaves its own sine stale: in the drift-kick-drift form no
+  /// flow reads the top level's sine and the next forward pass flows it again before any kick.
+  template <class Sys>
+  void backward(const Sys& sys, state_type& x, Scalar h, Scalar h0, int from,
+                bool stale_top = false) {
+    each_body(sys, x, [&](int b, Scalar m) {
+      for (int i = from; i >= 1; --i) flow(sys.chart(), b, i, m, h, !(stale_top && i == from));
+      if (h0 != Scalar(0)) flow(sys.chart(), b, 0, m, h0, !(stale_top && from == 0));
+    });
   }
 
   template <class Sys>
@@ -110,10 +125,10 @@ class Composition {
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar half = w_[k] * dt / Scalar(2);
       forward(sys, x, pending, half, top);
-      sys.kick(x, w_[k] * dt, ws_);
+      sys.kick_cached(x, w_[k] * dt, ws_);
       // Levels n-1..1 now; level 0 is fused with the next stage's first half flow.
       pending = half + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
-      backward(sys, x, half, k + 1 < s ? Scalar(0) : pending, top);
+      backward(sys, x, half, k + 1 < s ? Scalar(0) : pending, top, /*stale_top=*/true);
     }
   }
 
@@ -124,28 +139,23 @@ class Composition {
     Scalar pending = w_[0] * dt / Scalar(2);  // half kick carried over from the last stage
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar h = w_[k] * dt;
-      sys.kick(x, pending, ws_);
+      sys.kick_cached(x, pending, ws_);
       // Kinetic part: K_1(h/2)..K_{n-1}(h/2) K_n(h) K_{n-1}(h/2)..K_1(h/2).
       if (top == 0) {
         forward(sys, x, h, h, 0);
       } else {
         forward(sys, x, h / Scalar(2), h / Scalar(2), top - 1);
-        for (int b = 0; b < sys.bodies(); ++b) {
-          ws_.q = x.q.col(b);
-          ws_.p = x.p.col(b);
-          level_flow(sys.chart(), top, ws_.q, ws_.p, sys.mass(b), h);
-          x.q.col(b) = ws_.q;
-          x.p.col(b) = ws_.p;
-        }
+        each_body(sys, x, [&](int b, Scalar m) { flow(sys.chart(), b, top, m, h); });
         backward(sys, x, h / Scalar(2), h / Scalar(2), top - 1);
       }
       pending = h / Scalar(2) + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
     }
-    sys.kick(x, pending, ws_);
+    sys.kick_cached(x, pending, ws_);
   }
 
   std::array<Scalar, Table::stages> w_;
   Workspace<Chart> ws_;
+  typename state_type::Matrix last_q_;  // q after the last step: its trig is in ws_
 };
 
 /// The named methods (names as in the sesi program).

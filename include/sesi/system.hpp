@@ -30,10 +30,24 @@ constexpr int ambient_dimension_of() {
 }
 }  // namespace detail
 
+/// Per-body trig caches for charts that have them; nothing otherwise.
+template <class Chart>
+struct TrigStore {
+  void resize(int, int) {}
+};
+template <HasTrigCache Chart>
+struct TrigStore<Chart> {
+  std::vector<typename Chart::TrigType> trig;
+  void resize(int dim, int bodies) {
+    if (static_cast<int>(trig.size()) != bodies) trig.resize(static_cast<std::size_t>(bodies));
+    for (auto& t : trig) t.resize(dim);
+  }
+};
+
 /// Scratch space of a step for one chart type, sized once (steppers own one, so a step
 /// allocates nothing).
 template <HierarchicalChart Chart>
-struct Workspace {
+struct Workspace : TrigStore<Chart> {
   using Scalar = typename Chart::Scalar;
   static constexpr int ambient_dimension = detail::ambient_dimension_of<Chart>();
   using Point = typename Chart::Point;
@@ -59,6 +73,7 @@ struct Workspace {
 
   void resize(int dim, int ambient, int bodies) {
     if (X.cols() != bodies || X.rows() != ambient) {
+      TrigStore<Chart>::resize(dim, bodies);
       X.resize(ambient, bodies);
       G.resize(ambient, bodies);
     }
@@ -125,20 +140,27 @@ class System {
     return k;
   }
 
+  /// Refresh the per-body trig caches of w from s (charts with HasTrigCache; else nothing).
+  void refresh(const StateType& s, Workspace& w) const {
+    w.resize(dim(), ambient_dim(), bodies());
+    if constexpr (HasTrigCache<Chart>) {
+      for (int b = 0; b < bodies(); ++b) {
+        w.q = s.q.col(b);
+        chart_.refresh(w.q, w.trig[static_cast<std::size_t>(b)]);
+      }
+    }
+  }
+
   /// Embedding points of all bodies into w.X.
   void embed_all(const StateType& s, Workspace& w) const {
-    for (int b = 0; b < bodies(); ++b) {
-      w.q = s.q.col(b);
-      chart_.embed(w.q, w.x);
-      w.X.col(b) = w.x;
-    }
+    refresh(s, w);
+    embed_cached(s, w);
   }
 
   Scalar potential_energy(const StateType& s, Workspace& w) const {
     if constexpr (!has_potential) {
       return Scalar(0);
     } else {
-      w.resize(dim(), ambient_dim(), bodies());
       embed_all(s, w);
       Scalar v(0);
       std::apply([&](const auto&... term) { ((v += term_energy(term, w)), ...); }, terms_);
@@ -166,12 +188,19 @@ class System {
   /// The potential kick: p -= h dV/dq, with dV/dq = J(q)^T dV/dx per body.
   void kick(StateType& s, Scalar h, Workspace& w) const {
     if constexpr (has_potential) {
-      embed_all(s, w);
+      refresh(s, w);
+      kick_cached(s, h, w);
+    }
+  }
+
+  /// The kick when w's trig caches already hold the trig of s.q (the composition engine keeps
+  /// them in sync through the level flows, so a kick computes no sine).
+  void kick_cached(StateType& s, Scalar h, Workspace& w) const {
+    if constexpr (has_potential) {
+      embed_cached(s, w);
       ambient_gradient(w);
       for (int b = 0; b < bodies(); ++b) {
-        w.q = s.q.col(b);
-        w.g = w.G.col(b);
-        chart_.pullback(w.q, w.g, w.p);
+        pull_back(s, w, b);
         s.p.col(b) -= h * w.p;
       }
     }
@@ -185,15 +214,36 @@ class System {
       embed_all(s, w);
       ambient_gradient(w);
       for (int b = 0; b < bodies(); ++b) {
-        w.q = s.q.col(b);
-        w.g = w.G.col(b);
-        chart_.pullback(w.q, w.g, w.p);
+        pull_back(s, w, b);
         out.col(b) = w.p;
       }
     }
   }
 
  private:
+  /// w.X from the caches (or from q for charts without them).
+  void embed_cached(const StateType& s, Workspace& w) const {
+    for (int b = 0; b < bodies(); ++b) {
+      if constexpr (HasTrigCache<Chart>) {
+        chart_.embed(w.trig[static_cast<std::size_t>(b)], w.x);
+      } else {
+        w.q = s.q.col(b);
+        chart_.embed(w.q, w.x);
+      }
+      w.X.col(b) = w.x;
+    }
+  }
+  /// w.p = J(q_b)^T w.G.col(b).
+  void pull_back(const StateType& s, Workspace& w, int b) const {
+    w.g = w.G.col(b);
+    if constexpr (HasTrigCache<Chart>) {
+      chart_.pullback(w.trig[static_cast<std::size_t>(b)], w.g, w.p);
+    } else {
+      w.q = s.q.col(b);
+      chart_.pullback(w.q, w.g, w.p);
+    }
+  }
+
   template <class Term>
   Scalar term_energy(const Term& term, Workspace& w) const {
     Scalar v(0);

@@ -73,53 +73,87 @@ class Hyperbolic {
     return -two_k * (k == 0 ? special::coth(q[0]) : special::cot(q[k]));
   }
 
-  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h) const {
+  // ---- the cached fast path (HasTrigCache): entry 0 holds sinh and cosh of the radius ----
+  using TrigType = Trig<Scalar, N>;
+  void refresh(const Point& q, TrigType& t) const {
+    using std::cosh;
+    using std::sinh;
+    t.resize(dim_);
+    t.s[0] = sinh(q[0]);
+    t.c[0] = cosh(q[0]);
+    detail::angle_trig(q, 1, dim_, t);
+  }
+  /// Exact flow of K_i for time h; t must hold the trig of q_{<i} and is kept in sync (entry i
+  /// left stale with own_trig = false, as in Sphere::level_flow).
+  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h, TrigType& t,
+                  bool own_trig = true) const {
+    using std::cos;
+    using std::cosh;
+    using std::sin;
+    using std::sinh;
     const Scalar pi = p[i];
     if (i == 0) {
       q[0] += h * pi * inv_r2_ / m;
+      if (own_trig) {
+        t.s[0] = sinh(q[0]);
+        t.c[0] = cosh(q[0]);
+      }
       return;
     }
-    const auto radial = special::inv_sinh2_coth(q[0]);
-    Scalar g = inv_r2_ * radial.inv_sin2;
-    for (int k = 1; k < i; ++k) g *= special::inv_sin2_cot(q[k]).inv_sin2;
+    Scalar g = inv_r2_;
+    for (int k = 0; k < i; ++k) {
+      const Scalar r = special::reciprocal_sine(t.s[k]);
+      g *= r * r;
+    }
     const Scalar rate = h * pi * g / m;
-    const Scalar push = rate * pi;
-    p[0] += push * radial.cot;
-    for (int k = 1; k < i; ++k) p[k] += push * special::inv_sin2_cot(q[k]).cot;
+    const Scalar push = rate * pi;  // h * 2 K_i; dK_i/dq_1 = -2 coth(q_1) K_i, others -2 cot(q_k) K_i
+    for (int k = 0; k < i; ++k) p[k] += push * t.c[k] * special::reciprocal_sine(t.s[k]);
     q[i] += rate;
+    if (own_trig) {
+      t.s[i] = sin(q[i]);
+      t.c[i] = cos(q[i]);
+    }
   }
-
-  void embed(const Point& q, Ambient& x) const {
-    using std::cosh;
-    using std::sinh;
+  void embed(const TrigType& t, Ambient& x) const {
     x.resize(ambient_dim());
-    x[dim_] = radius_ * cosh(q[0]);
-    detail::unit_sphere_embed(q, 1, dim_, radius_ * sinh(q[0]), x);
+    x[dim_] = radius_ * t.c[0];
+    detail::unit_sphere_embed(t, 1, dim_, radius_ * t.s[0], x);
     // Invariant <x,x> = -R^2, to round-off relative to x_{n+1}^2 (which grows like e^{2 q_1}).
     SESI_CHECK(abs_of(constraint(x)) <= invariant_tolerance() * x[dim_] * x[dim_],
                "embedding left the hyperboloid: <x,x> != -R^2");
   }
-  void pullback(const Point& q, const Ambient& g, Point& out) const {
-    using std::cosh;
-    using std::sinh;
+  /// d/dq_1 = R (cosh q_1 u . g_space + sinh q_1 g_time); angles: the sphere part scaled by
+  /// R sinh q_1.
+  void pullback(const TrigType& t, const Ambient& g, Point& out) const {
     out.resize(dim_);
-    const Scalar sh = sinh(q[0]), ch = cosh(q[0]);
-    // d/dq_1: R (cosh q_1 u . g_space + sinh q_1 g_time); angles: sphere part scaled by R sinh q_1.
-    auto& u = detail::TrigScratch<Scalar, ambient_dimension>::template buffer<3>(ambient_dim());
-    detail::unit_sphere_embed(q, 1, dim_, Scalar(1), u);
-    Scalar gu(0);
-    for (int a = 0; a < dim_; ++a) gu += g[a] * u[a];
-    out[0] = radius_ * (ch * gu + sh * g[dim_]);
-    detail::unit_sphere_pullback<N>(q, 1, dim_, radius_ * sh, g, out);
+    const Scalar gu = detail::unit_sphere_pullback(t, 1, dim_, radius_ * t.s[0], g, out);
+    out[0] = radius_ * (t.c[0] * gu + t.s[0] * g[dim_]);
+  }
+
+  // ---- the same from q alone ----
+  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h) const {
+    TrigType t;
+    refresh(q, t);
+    level_flow(i, q, p, m, h, t);
+  }
+  void embed(const Point& q, Ambient& x) const {
+    TrigType t;
+    refresh(q, t);
+    embed(t, x);
+  }
+  void pullback(const Point& q, const Ambient& g, Point& out) const {
+    TrigType t;
+    refresh(q, t);
+    pullback(t, g, out);
   }
   void velocity(const Point& q, const Point& p, Scalar m, Ambient& v) const {
-    using std::cosh;
-    using std::sinh;
     Point qd(dim_);
     for (int i = 0; i < dim_; ++i) qd[i] = kinetic_dp(i, q, p[i], m);
+    TrigType t;
+    refresh(q, t);
     v.resize(ambient_dim());
-    v[dim_] = radius_ * sinh(q[0]) * qd[0];
-    detail::unit_sphere_push(q, qd, 1, dim_, radius_ * sinh(q[0]), radius_ * cosh(q[0]) * qd[0], v);
+    v[dim_] = radius_ * t.s[0] * qd[0];
+    detail::unit_sphere_push(t, qd, 1, dim_, radius_ * t.s[0], radius_ * t.c[0] * qd[0], v);
   }
   /// Chart coordinates of a hyperboloid point.
   void chart(const Ambient& x, Point& q) const {

@@ -61,36 +61,73 @@ class Sphere {
     return -pi * pi * inverse_metric(i, q) * special::cot(q[k]) / m;
   }
 
-  /// Exact flow of K_i for time h: one sine and cosine per lower level.
-  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h) const {
+  // ---- the cached fast path (HasTrigCache): flows, embedding and pull-back share sines ----
+  using TrigType = Trig<Scalar, N>;
+  /// Sines and cosines of all coordinates of q.
+  void refresh(const Point& q, TrigType& t) const {
+    t.resize(dim_);
+    detail::angle_trig(q, 0, dim_, t);
+  }
+  /// Exact flow of K_i for time h; t must hold the trig of q_{<i} and is kept in sync, except
+  /// that with own_trig = false entry i is left stale (the engine does so when no reader of
+  /// entry i comes before the next flow of level i).
+  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h, TrigType& t,
+                  bool own_trig = true) const {
+    using std::cos;
+    using std::sin;
     Scalar g = inv_r2_;
-    for (int k = 0; k < i; ++k) g *= special::inv_sin2_cot(q[k]).inv_sin2;
+    for (int k = 0; k < i; ++k) {
+      const Scalar r = special::reciprocal_sine(t.s[k]);
+      g *= r * r;
+    }
     const Scalar pi = p[i];
     const Scalar rate = h * pi * g / m;  // h dK_i/dp_i
     if (i > 0) {
-      const Scalar push = rate * pi;  // h * 2 K_i
-      for (int k = 0; k < i; ++k) p[k] += push * special::inv_sin2_cot(q[k]).cot;
+      const Scalar push = rate * pi;  // h * 2 K_i; dK_i/dq_k = -2 cot(q_k) K_i
+      for (int k = 0; k < i; ++k) p[k] += push * t.c[k] * special::reciprocal_sine(t.s[k]);
     }
     q[i] += rate;
+    if (own_trig) {
+      t.s[i] = sin(q[i]);
+      t.c[i] = cos(q[i]);
+    }
   }
-
-  void embed(const Point& q, Ambient& x) const {
+  void embed(const TrigType& t, Ambient& x) const {
     x.resize(ambient_dim());
-    detail::unit_sphere_embed(q, 0, dim_, radius_, x);
+    detail::unit_sphere_embed(t, 0, dim_, radius_, x);
     // Invariant |x| = R, to round-off of the n products that build x.
     SESI_CHECK(abs_of(constraint(x)) <= invariant_tolerance() * radius_ * radius_,
                "embedding left the sphere: |x| != R");
   }
-  void pullback(const Point& q, const Ambient& g, Point& out) const {
+  void pullback(const TrigType& t, const Ambient& g, Point& out) const {
     out.resize(dim_);
-    detail::unit_sphere_pullback<N>(q, 0, dim_, radius_, g, out);
+    detail::unit_sphere_pullback(t, 0, dim_, radius_, g, out);
+  }
+
+  // ---- the same from q alone ----
+  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h) const {
+    TrigType t;
+    refresh(q, t);
+    level_flow(i, q, p, m, h, t);
+  }
+  void embed(const Point& q, Ambient& x) const {
+    TrigType t;
+    refresh(q, t);
+    embed(t, x);
+  }
+  void pullback(const Point& q, const Ambient& g, Point& out) const {
+    TrigType t;
+    refresh(q, t);
+    pullback(t, g, out);
   }
   /// Embedding velocity v = J(q) qdot with qdot_i = dK_i/dp_i.
   void velocity(const Point& q, const Point& p, Scalar m, Ambient& v) const {
     Point qd(dim_);
     for (int i = 0; i < dim_; ++i) qd[i] = kinetic_dp(i, q, p[i], m);
+    TrigType t;
+    refresh(q, t);
     v.resize(ambient_dim());
-    detail::unit_sphere_push(q, qd, 0, dim_, radius_, Scalar(0), v);
+    detail::unit_sphere_push(t, qd, 0, dim_, radius_, Scalar(0), v);
   }
   /// Chart coordinates of an embedding point (|x| = R).
   void chart(const Ambient& x, Point& q) const {
