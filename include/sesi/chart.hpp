@@ -72,6 +72,18 @@ concept MetricSpace = EmbeddedChart<C> && requires(const C& c, const typename C:
   { c.curvature() } -> std::convertible_to<typename C::Scalar>;
 };
 
+namespace detail {
+/// Ambient dimension of a chart type (its own dimension for charts without an embedding).
+template <class Chart>
+constexpr int ambient_dimension_of() {
+  if constexpr (requires { Chart::ambient_dimension; }) {
+    return Chart::ambient_dimension;
+  } else {
+    return Chart::dimension;
+  }
+}
+}  // namespace detail
+
 /// The exact flow of K_i for time h on one body, from the concept's minimum API alone:
 /// q_i += h dK_i/dp_i, and p_k -= h dK_i/dq_k for k < i (all evaluated at the start, which is
 /// exact because q_{<i} and p_i do not move under this flow).

@@ -27,7 +27,7 @@ int momentum_map_size(const Chart& chart) {
   return a * (a - 1) / 2 + (has_translations<Chart> ? a : 0);
 }
 
-/// Embedding points (columns) of all bodies.
+/// Embedding points (columns) of all bodies, in world coordinates (through their frames).
 template <class Sys>
 Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_points(
     const Sys& sys, const State<typename Sys::Chart>& s) {
@@ -39,12 +39,12 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_po
   for (int b = 0; b < sys.bodies(); ++b) {
     q = s.q.col(b);
     sys.chart().embed(q, x);
-    X.col(b) = x;
+    X.col(b) = s.framed() ? (s.frames[static_cast<std::size_t>(b)] * x).eval() : x;
   }
   return X;
 }
 
-/// Embedding velocities (columns) of all bodies.
+/// Embedding velocities (columns) of all bodies, in world coordinates.
 template <class Sys>
 Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_velocities(
     const Sys& sys, const State<typename Sys::Chart>& s) {
@@ -57,7 +57,7 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_ve
     q = s.q.col(b);
     p = s.p.col(b);
     sys.chart().velocity(q, p, sys.mass(b), v);
-    V.col(b) = v;
+    V.col(b) = s.framed() ? (s.frames[static_cast<std::size_t>(b)] * v).eval() : v;
   }
   return V;
 }

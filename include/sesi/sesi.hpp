@@ -14,3 +14,4 @@
 #include "sesi/state.hpp"
 #include "sesi/stepper.hpp"
 #include "sesi/system.hpp"
+#include "sesi/recharting.hpp"

@@ -19,17 +19,6 @@
 
 namespace sesi {
 
-namespace detail {
-template <class Chart>
-constexpr int ambient_dimension_of() {
-  if constexpr (requires { Chart::ambient_dimension; }) {
-    return Chart::ambient_dimension;
-  } else {
-    return Chart::dimension;
-  }
-}
-}  // namespace detail
-
 /// Per-body trig caches for charts that have them; nothing otherwise.
 template <class Chart>
 struct TrigStore {
@@ -230,12 +219,20 @@ class System {
         w.q = s.q.col(b);
         chart_.embed(w.q, w.x);
       }
-      w.X.col(b) = w.x;
+      if (s.framed()) {
+        w.X.col(b).noalias() = s.frames[static_cast<std::size_t>(b)] * w.x;  // world = F local
+      } else {
+        w.X.col(b) = w.x;
+      }
     }
   }
-  /// w.p = J(q_b)^T w.G.col(b).
+  /// w.p = J(q_b)^T F_b^T w.G.col(b) (the chain rule through the body's frame, if any).
   void pull_back(const StateType& s, Workspace& w, int b) const {
-    w.g = w.G.col(b);
+    if (s.framed()) {
+      w.g.noalias() = s.frames[static_cast<std::size_t>(b)].transpose() * w.G.col(b);
+    } else {
+      w.g = w.G.col(b);
+    }
     if constexpr (HasTrigCache<Chart>) {
       chart_.pullback(w.trig[static_cast<std::size_t>(b)], w.g, w.p);
     } else {

@@ -174,6 +174,78 @@ class Hyperbolic {
     p *= m;
   }
 
+  // ---- re-charting (recharting.hpp, docs/charts.md) ----
+  /// Is q too near the polar origin (q_1 < min_radius, n >= 2), too far from it
+  /// (|q_1| > max_radius), or near a pole of the angles (|sin q_k| < min_sine, 1 <= k < n-1)?
+  template <class Policy>
+  bool needs_rechart(const Point& q, const Policy& policy) const {
+    using std::abs;
+    using std::sin;
+    if (abs(q[0]) > policy.max_radius) return true;
+    if (dim_ >= 2 && q[0] < policy.min_radius) return true;
+    for (int k = 1; k + 1 < dim_; ++k) {
+      if (abs(sin(q[k])) < policy.min_sine) return true;
+    }
+    return false;
+  }
+  /// The chart change L (Lorentz) that puts the body at radius policy.home_radius of the new
+  /// chart (at its origin for n = 1), moving tangentially along the last angle with every other
+  /// angle pi/2: its geodesic's closest approach to the new origin is home_radius, away from the
+  /// polar singularity. Built with the standard boost B(u) to the body's rest frame, where the
+  /// remaining choices are Euclidean (well conditioned). Returns the new q, p (cotangent lift).
+  template <class Policy, class Frame>
+  void home(const Ambient& x, const Ambient& v, Scalar m, const Policy& policy, Frame& change,
+            Point& q, Point& p) const {
+    using std::cosh;
+    using std::sinh;
+    using std::sqrt;
+    const int n = dim_;
+    const auto us = (x.head(n) / radius_).eval();    // spatial part of u = x / R
+    const Scalar gamma = sqrt(Scalar(1) + us.squaredNorm());  // u_t, from <u,u> = -1
+    const Scalar k = Scalar(1) / (Scalar(1) + gamma);
+    // B(u) (a, 0) = (a + us (us.a) k, us.a): the boost that takes the origin's tangent
+    // vectors to those at u. Its inverse on a tangent vector w: a = w_s - us w_t k.
+    const auto to_u = [&](const auto& a) {
+      Ambient w(n + 1);
+      const Scalar ua = us.dot(a);
+      w.head(n) = a + us * (ua * k);
+      w[n] = ua;
+      return w;
+    };
+    const Ambient vt = v + minkowski(x, v) / (radius_ * radius_) * x;  // tangent part of v
+    const auto vs = (vt.head(n) - us * (vt[n] * k)).eval();            // v in the rest frame
+    const Scalar speed = vs.norm();
+    // Rest-frame spatial basis: [direction of v (n >= 2), then a completion]. For n >= 2 the
+    // body is placed displaced along c_0 = -nhat so that it moves tangentially.
+    Eigen::Matrix<Scalar, N, N> rest(n, n);
+    Eigen::Matrix<Scalar, N, Eigen::Dynamic> lead(n, (n >= 2 && speed > 0) ? 1 : 0);
+    if (lead.cols() == 1) lead.col(0) = vs / speed;
+    detail::complete_orthonormal(lead, rest);
+    const Ambient uu = x / radius_;
+    change.resize(n + 1, n + 1);
+    if (n == 1) {
+      change.col(0) = to_u(rest.col(0));
+      change.col(1) = uu;
+    } else {
+      const Scalar r0 = policy.home_radius;
+      const Ambient nhat = to_u(rest.col(1));
+      change.col(0) = -sinh(r0) * uu + cosh(r0) * nhat;
+      change.col(n) = cosh(r0) * uu - sinh(r0) * nhat;
+      change.col(1) = to_u(rest.col(0));
+      for (int c = 2; c < n; ++c) change.col(c) = to_u(rest.col(c));
+    }
+    // L^{-1} = eta L^T eta.
+    const auto inverse = [&](const Ambient& w) {
+      Ambient e = w;
+      e[n] = -e[n];
+      Ambient r = change.transpose() * e;
+      r[n] = -r[n];
+      return r;
+    };
+    chart(inverse(x), q);
+    momentum(q, inverse(v), m, p);
+  }
+
   /// Constraint residual <x,x> + R^2 (zero on the space).
   Scalar constraint(const Ambient& x) const { return minkowski(x, x) + radius_ * radius_; }
   /// Tangency residual <x, v> (zero for v tangent at x).

@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <Eigen/Core>
+#include <Eigen/QR>
 
 namespace sesi {
 
@@ -119,6 +120,22 @@ void unit_sphere_angles(const X& x, int a, int n, Q& q) {
     q[j] = atan2(sqrt(tail2), top);
     tail2 += top * top;
   }
+}
+
+/// Q, an orthogonal matrix whose leading columns are the orthonormal columns of lead (a
+/// Householder QR completes them; the leading columns are then set exactly).
+template <class Lead, class Q>
+void complete_orthonormal(const Lead& lead, Q& q) {
+  using Square = Eigen::Matrix<typename Lead::Scalar, Lead::RowsAtCompileTime, Lead::RowsAtCompileTime>;
+  const Eigen::Index a = lead.rows();
+  if (lead.cols() == 0) {
+    q = Square::Identity(a, a);
+    return;
+  }
+  Eigen::HouseholderQR<Eigen::Matrix<typename Lead::Scalar, Lead::RowsAtCompileTime, Eigen::Dynamic>>
+      qr(lead);
+  q = qr.householderQ() * Square::Identity(a, a);
+  q.leftCols(lead.cols()) = lead;
 }
 
 }  // namespace detail

@@ -140,6 +140,35 @@ class Sphere {
     p *= m;
   }
 
+  // ---- re-charting (recharting.hpp, docs/charts.md) ----
+  /// Is q within policy.min_sine of the singular set (sin q_k = 0 for a polar angle k < n-1)?
+  template <class Policy>
+  bool needs_rechart(const Point& q, const Policy& policy) const {
+    using std::abs;
+    using std::sin;
+    for (int k = 0; k + 1 < dim_; ++k) {
+      if (abs(sin(q[k])) < policy.min_sine) return true;
+    }
+    return false;
+  }
+  /// The chart change L (orthogonal) that puts the body at x = R e_1 of the new chart, moving
+  /// along e_2: every polar angle pi/2, on the great circle of the last angle, where the chart is
+  /// best conditioned and free motion never leaves. Returns the new q, p (cotangent lift).
+  template <class Policy, class Frame>
+  void home(const Ambient& x, const Ambient& v, Scalar m, const Policy&, Frame& change, Point& q,
+            Point& p) const {
+    const Ambient xh = x / x.norm();
+    const Ambient tangent = v - xh.dot(v) * xh;  // v, cleaned of round-off off the tangent space
+    const Scalar speed = tangent.norm();
+    Eigen::Matrix<Scalar, ambient_dimension, Eigen::Dynamic> lead(ambient_dim(), speed > 0 ? 2 : 1);
+    lead.col(0) = xh;
+    if (speed > 0) lead.col(1) = tangent / speed;
+    detail::complete_orthonormal(lead, change);
+    const Ambient x_new = change.transpose() * x, v_new = change.transpose() * v;
+    chart(x_new, q);
+    momentum(q, v_new, m, p);
+  }
+
   /// Constraint residual |x|^2 - R^2 (zero on the space).
   Scalar constraint(const Ambient& x) const { return x.squaredNorm() - radius_ * radius_; }
   /// Tangency residual x . v (zero for v tangent at x).
