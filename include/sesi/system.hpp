@@ -44,7 +44,7 @@ struct Workspace : TrigStore<Chart> {
   using AmbientMatrix = Eigen::Matrix<Scalar, ambient_dimension, Eigen::Dynamic>;
 
   Point q, p;            // one body's coordinates and momenta
-  AmbientVector x, y, g; // one body's (or pair's) ambient points and gradient
+  AmbientVector x, y, g, gy;  // one body's (or pair's) ambient points and gradients
   AmbientMatrix X, G;    // all bodies' embedding points and potential gradients
 
   Workspace() {
@@ -57,6 +57,7 @@ struct Workspace : TrigStore<Chart> {
       x.setZero();
       y.setZero();
       g.setZero();
+      gy.setZero();
     }
   }
 
@@ -74,6 +75,7 @@ struct Workspace : TrigStore<Chart> {
       x.resize(ambient);
       y.resize(ambient);
       g.resize(ambient);
+      gy.resize(ambient);
     }
   }
 };
@@ -276,6 +278,11 @@ class System {
             w.g *= term.derivative(chart_, d, mass(i), mass(j)) / d;
             w.G.col(i) += w.g;
             w.G.col(j) -= w.g;
+          } else if constexpr (requires { chart_.distance_gradients(w.x, w.y, w.g, w.g); }) {
+            const Scalar d = chart_.distance_gradients(w.x, w.y, w.g, w.gy);
+            const Scalar dw = term.derivative(chart_, d, mass(i), mass(j));
+            w.G.col(i) += dw * w.g;
+            w.G.col(j) += dw * w.gy;
           } else {
             const Scalar d = chart_.distance(w.x, w.y);
             const Scalar dw = term.derivative(chart_, d, mass(i), mass(j));

@@ -53,6 +53,14 @@ class Euclidean {
     SESI_CHECK(norm > Scalar(0), "distance gradient at coincident points");
     g /= norm;
   }
+  Scalar distance_gradients(const Ambient& x, const Ambient& y, Ambient& gx, Ambient& gy) const {
+    gx = x - y;
+    const Scalar norm = gx.norm();
+    SESI_CHECK(norm > Scalar(0), "distance gradient at coincident points");
+    gx /= norm;
+    gy = -gx;
+    return norm;
+  }
 
  private:
   int dim_;

@@ -273,6 +273,21 @@ class Hyperbolic {
     SESI_CHECK(sh > Scalar(0), "distance gradient at coincident points");
     g /= sh;
   }
+  /// The distance and its gradients at both ends at once (the pair loop's one call per pair).
+  Scalar distance_gradients(const Ambient& x, const Ambient& y, Ambient& gx, Ambient& gy) const {
+    using std::sinh;
+    const Scalar inv_r = Scalar(1) / radius_;
+    const Scalar ab = minkowski(x, y) * inv_r * inv_r;
+    const Scalar d = distance(x, y);
+    const Scalar sh = sinh(d * inv_r);
+    SESI_CHECK(sh > Scalar(0), "distance gradient at coincident points");
+    const Scalar k = -inv_r / sh;
+    gx = k * (y + ab * x);
+    gy = k * (x + ab * y);
+    gx[dim_] = -gx[dim_];
+    gy[dim_] = -gy[dim_];
+    return d;
+  }
 
  private:
   static Scalar abs_of(Scalar v) { return v < Scalar(0) ? -v : v; }
