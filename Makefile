@@ -27,8 +27,10 @@ test: build
 
 demo: deps
 	cmake -S . -B $(RELEASE_DIR) -DCMAKE_BUILD_TYPE=Release -DSESI_BUILD_TESTS=OFF
-	cmake --build $(RELEASE_DIR) -j $(JOBS) --target seed_scene
-	$(RELEASE_DIR)/examples/seed_scene
+	cmake --build $(RELEASE_DIR) -j $(JOBS) --target sesi_program
+	$(RELEASE_DIR)/src/sesi run --out sesi-out/paper
+	@# Debian's python3-matplotlib belongs to /usr/bin/python3, whatever python3 comes first in PATH.
+	$$(test -x /usr/bin/python3 && echo /usr/bin/python3 || echo python3) tools/plot_run.py sesi-out/paper
 
 clean:
 	rm -rf $(BUILD_DIR) $(RELEASE_DIR)

@@ -31,6 +31,7 @@ template <class T>
 struct unwrap {
   using type = T;
   static T& get(T& t) { return t; }
+  static const T& get(const T& t) { return t; }  // do_step(const System&, ...)
 };
 template <class T>
 struct unwrap<std::reference_wrapper<T>> {

@@ -4,7 +4,8 @@
 /// (issue #4): the same System and State as the chart steppers, no Boost.
 ///
 ///   dq/dt =  dH/dp,   dH/dp_i = dK_i/dp_i                      (the chart's kinetic_dp)
-///   dp/dt = -dH/dq,   dH/dq_k = sum_{i>k} dK_i/dq_k + dV/dq_k  (kinetic_dq; System::potential_gradient)
+///   dp/dt = -dH/dq,   dH/dq_k = sum_{i>k} dK_i/dq_k + dV/dq_k  (kinetic_dq, and
+///                                                               System::potential_gradient)
 ///
 /// with H = sum_b sum_i K_i(q_b, p_b; m_b) + V (seed paper, Discussion; system.hpp). One call of
 /// the field is one force evaluation (one potential gradient): the unit in which the reference
@@ -12,6 +13,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <type_traits>
 
 #include <Eigen/Core>
 
@@ -21,34 +23,37 @@
 
 namespace sesi::reference {
 
-/// The Hamiltonian vector field of a System in its chart. Owns the scratch space of an
-/// evaluation (sized once: an evaluation allocates nothing) and counts evaluations.
-/// Holds a pointer to the system, which must outlive it.
-template <class Sys>
-class HamiltonianField {
+/// Evaluation of the Hamiltonian vector field for the systems of one chart type: owns the
+/// scratch space (sized on first use: later evaluations allocate nothing) and counts
+/// evaluations; the system is passed to each call, so that steppers templated on the chart
+/// alone (like the chart steppers) can own one.
+template <HierarchicalChart Chart>
+class ChartField {
  public:
-  using System = Sys;
-  using Chart = typename Sys::Chart;
-  using Scalar = typename Sys::Scalar;
+  using Scalar = typename Chart::Scalar;
   using StateType = State<Chart>;
   using Matrix = typename StateType::Matrix;
 
-  explicit HamiltonianField(const Sys& sys)
-      : sys_(&sys),
-        ws_(sys.make_workspace()),
-        grad_(Matrix::Zero(sys.dim(), sys.bodies())),
-        q_(sys.dim()),
-        p_(sys.dim()) {}
-
-  const Sys& system() const { return *sys_; }
+  ChartField() {
+    // Fixed-size members start defined, so that copying a fresh stepper copies no garbage.
+    if constexpr (Chart::dimension != Eigen::Dynamic) {
+      q_.setZero();
+      p_.setZero();
+    }
+  }
 
   /// dxdt = (dH/dp, -dH/dq) at x; dxdt is resized to x's shape if needed.
-  void operator()(const StateType& x, StateType& dxdt) {
+  template <class Sys>
+  void evaluate(const Sys& sys, const StateType& x, StateType& dxdt) {
+    static_assert(std::is_same_v<typename Sys::Chart, Chart>, "system and field charts differ");
     ++evaluations_;
-    const Sys& sys = *sys_;
     const Chart& chart = sys.chart();
     const int n = sys.dim();
-    sys.potential_gradient(x, ws_, grad_);
+    if (q_.size() != n) {
+      q_.resize(n);
+      p_.resize(n);
+    }
+    sys.potential_gradient(x, ws_, grad_);  // sizes ws_ and grad_ on first use
     dxdt.q.resize(n, x.bodies());
     dxdt.p.resize(n, x.bodies());
     for (int b = 0; b < x.bodies(); ++b) {
@@ -70,11 +75,28 @@ class HamiltonianField {
   void reset_evaluations() { evaluations_ = 0; }
 
  private:
-  const Sys* sys_;
-  typename Sys::Workspace ws_;
+  Workspace<Chart> ws_;
   Matrix grad_;  // dV/dq, dim x bodies
   typename Chart::Point q_, p_;
   std::size_t evaluations_ = 0;
+};
+
+/// The Hamiltonian vector field of one System: a ChartField bound to the system, which must
+/// outlive it. field(x, dxdt) is one force evaluation.
+template <class Sys>
+class HamiltonianField : public ChartField<typename Sys::Chart> {
+ public:
+  using System = Sys;
+  using Chart = typename Sys::Chart;
+  using StateType = State<Chart>;
+
+  explicit HamiltonianField(const Sys& sys) : sys_(&sys) {}
+
+  const Sys& system() const { return *sys_; }
+  void operator()(const StateType& x, StateType& dxdt) { this->evaluate(*sys_, x, dxdt); }
+
+ private:
+  const Sys* sys_;
 };
 
 /// Length of the flat layout of a state: q (column-major, dim x bodies), then p.

@@ -163,7 +163,11 @@ class Hyperbolic {
       q[0] = asinh(x[0] / radius_);
       return;
     }
-    q[0] = asinh(x.head(dim_).norm() / radius_);
+    // |x_space| by a plain loop: Eigen's vectorised norm of x.head(dim_) on a fixed-size x
+    // trips GCC 12's -Warray-bounds (a false positive) when inlined into home() at -O2.
+    Scalar space2(0);
+    for (int i = 0; i < dim_; ++i) space2 += x[i] * x[i];
+    q[0] = asinh(std::sqrt(space2) / radius_);
     detail::unit_sphere_angles(x, 1, dim_, q);
   }
   /// Conjugate momenta of a tangent velocity: p = m J^T eta v (the metric is J^T eta J).

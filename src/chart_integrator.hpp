@@ -1,0 +1,75 @@
+#pragma once
+/// @file chart_integrator.hpp
+/// The Integrator of one compile-time chart: what each (space, dimension) instantiates, and
+/// nothing more (the system's kick and one composition engine; diagnostics are computed once
+/// per space, observables.hpp).
+
+#include <memory>
+
+#include <sesi/spaces/euclidean.hpp>
+#include <sesi/spaces/hyperbolic.hpp>
+#include <sesi/spaces/sphere.hpp>
+
+#include "integrator.hpp"
+#include "methods.hpp"
+#include "terms.hpp"
+
+namespace sesi::program {
+
+/// The chart of a scene's space as Chart (whose dimension must match the scene's).
+template <class Chart>
+Chart make_chart(const SpaceSpec& space) {
+  if constexpr (std::is_constructible_v<Chart, double, int>) {
+    return Chart(space.radius, space.dim);  // S^n, H^n
+  } else {
+    return Chart(space.dim);  // E^n
+  }
+}
+
+/// The scene's initial state on Chart.
+template <class Chart>
+sesi::State<Chart> initial_state(const Scene& scene) {
+  sesi::State<Chart> x(scene.dim(), scene.body_count());
+  for (int b = 0; b < scene.body_count(); ++b) {
+    x.q.col(b) = scene.bodies[static_cast<std::size_t>(b)].q;
+    x.p.col(b) = scene.bodies[static_cast<std::size_t>(b)].p;
+  }
+  return x;
+}
+
+template <class Chart>
+class ChartIntegrator final : public Integrator {
+ public:
+  explicit ChartIntegrator(const Scene& scene)
+      : sys_(make_system(scene, make_chart<Chart>(scene.space))),
+        x_(initial_state<Chart>(scene)),
+        stepper_(make_stepper(scene.integrator.method, sys_)) {}
+  ChartIntegrator(const ChartIntegrator&) = delete;
+  ChartIntegrator& operator=(const ChartIntegrator&) = delete;
+
+  void step(double t, double h) override { stepper_->step(x_, t, h); }
+  void read(Eigen::MatrixXd& q, Eigen::MatrixXd& p) const override {
+    q = x_.q;
+    p = x_.p;
+  }
+
+ private:
+  SystemOf<Chart> sys_;
+  sesi::State<Chart> x_;
+  std::unique_ptr<AnyStepper<SystemOf<Chart>>> stepper_;  // refers to sys_
+};
+
+/// The integrator on Space<N> for the N in Dims equal to scene.dim(), or nullptr.
+template <template <int, class> class Space, int... Dims>
+std::unique_ptr<Integrator> integrator_for(const Scene& scene) {
+  std::unique_ptr<Integrator> out;
+  const auto try_dim = [&]<int N>() {
+    if (scene.dim() != N) return false;
+    out = std::make_unique<ChartIntegrator<Space<N, double>>>(scene);
+    return true;
+  };
+  static_cast<void>((try_dim.template operator()<Dims>() || ...));
+  return out;
+}
+
+}  // namespace sesi::program

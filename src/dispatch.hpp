@@ -1,0 +1,26 @@
+#pragma once
+/// @file dispatch.hpp
+/// From the scene's runtime space and dimension to a compile-time chart, once per run:
+/// S^n, H^n and E^n with fixed-size Eigen types for n = 1..8 (max_fixed_dim), Eigen::Dynamic
+/// above. Each (space, dimension) instantiates one ChartIntegrator: one System type (terms.hpp)
+/// and one composition engine serving every method (methods.hpp). The instantiations are
+/// spread over the dispatch_*.cpp files so that they compile in parallel.
+
+#include <memory>
+
+#include "integrator.hpp"
+
+namespace sesi::program {
+
+/// The largest dimension with a fixed-size instantiation.
+inline constexpr int max_fixed_dim = 8;
+
+// One per file (dispatch_<space>_<dimensions>.cpp).
+std::unique_ptr<Integrator> sphere_integrator_1_4(const Scene&);
+std::unique_ptr<Integrator> sphere_integrator_5_up(const Scene&);
+std::unique_ptr<Integrator> hyperbolic_integrator_1_4(const Scene&);
+std::unique_ptr<Integrator> hyperbolic_integrator_5_up(const Scene&);
+std::unique_ptr<Integrator> euclidean_integrator_1_4(const Scene&);
+std::unique_ptr<Integrator> euclidean_integrator_5_up(const Scene&);
+
+}  // namespace sesi::program

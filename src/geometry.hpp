@@ -1,0 +1,63 @@
+#pragma once
+/// @file geometry.hpp
+/// The space of a scene at run time (dimension not known at compile time), for reading and
+/// checking initial conditions: membership and tangency, embedding <-> chart conversions,
+/// distances, the chart's domain. Built on the library's Eigen::Dynamic charts; the run itself
+/// uses the fixed-size instantiations (dispatch.hpp).
+
+#include <optional>
+#include <string>
+#include <variant>
+
+#include <Eigen/Core>
+
+#include <sesi/spaces/euclidean.hpp>
+#include <sesi/spaces/hyperbolic.hpp>
+#include <sesi/spaces/sphere.hpp>
+
+#include "scene.hpp"
+
+namespace sesi::program {
+
+class Geometry {
+ public:
+  using Vector = Eigen::VectorXd;
+
+  explicit Geometry(const SpaceSpec& space);
+
+  int dim() const { return space_.dim; }
+  /// n + 1 on S^n and H^n, n on E^n.
+  int ambient_dim() const;
+  /// R on S^n and H^n, 1 on E^n: the unit of length of tolerances.
+  double length_scale() const;
+
+  /// How far x is off the space, relative to its size (0 on E^n):
+  /// | |x|^2 - R^2 | / R^2 on S^n, | <x,x>_L + R^2 | / |x|^2 on H^n.
+  double constraint_residual(const Vector& x) const;
+  /// How far v is off the tangent space at x, relative: |x.v| / (|x||v|) on S^n,
+  /// |<x,v>_L| / (|x||v|) on H^n, 0 on E^n (and 0 for v = 0).
+  double tangency_residual(const Vector& x, const Vector& v) const;
+  /// On H^n, points lie on the upper sheet (last coordinate > 0); true elsewhere.
+  bool on_upper_sheet(const Vector& x) const;
+
+  /// Chart coordinates and conjugate momenta of a point x and tangent velocity v of a body of
+  /// mass m (the library's chart() and momentum()).
+  void to_chart(const Vector& x, const Vector& v, double m, Vector& q, Vector& p) const;
+  Vector embed(const Vector& q) const;
+  Vector velocity(const Vector& q, const Vector& p, double m) const;
+  double kinetic_energy(const Vector& q, const Vector& p, double m) const;
+  double distance(const Vector& x, const Vector& y) const;
+
+  /// The first chart coordinate of q outside the chart's domain (0-based), with the domain
+  /// ("[0, pi]", ">= 0"), or nothing. S^n: q_1..q_{n-1} in [0, pi]; H^n, n >= 2: q_1 >= 0,
+  /// q_2..q_{n-1} in [0, pi]; the last coordinate (and everything on E^n) is free.
+  std::optional<std::pair<int, std::string>> outside_domain(const Vector& q) const;
+
+ private:
+  using Charts = std::variant<sesi::Sphere<Eigen::Dynamic>, sesi::Hyperbolic<Eigen::Dynamic>,
+                              sesi::Euclidean<Eigen::Dynamic>>;
+  SpaceSpec space_;
+  Charts chart_;
+};
+
+}  // namespace sesi::program

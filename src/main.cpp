@@ -1,0 +1,103 @@
+// sesi: the command-line program (docs/program.md). Arguments here; `run` in run_command.cpp.
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "errors.hpp"
+#include "methods.hpp"
+#include "run_command.hpp"
+
+namespace {
+
+using namespace sesi::program;
+
+std::string run_footer() {
+  std::string text = "\nMETHODS (--method, [integrator] method):\n";
+  for (const MethodInfo& m : method_catalogue()) {
+    char line[160];
+    std::snprintf(line, sizeof line, "  %-16s order %d  %.*s\n", std::string(m.name).c_str(), m.order,
+                  static_cast<int>(m.about.size()), m.about.data());
+    text += line;
+  }
+  text +=
+      "\nSCENE FILES (TOML; every key in docs/scene-format.md):\n"
+      "  [space]        kind = \"sphere\" | \"hyperbolic\" | \"euclidean\", dim, radius\n"
+      "  [[bodies]]     mass, and q (chart coordinates) with p (momenta), or x (embedding point)\n"
+      "                 with v (tangent velocity)\n"
+      "  [[potential]]  kind = \"chord-well\" (theta0, strength), \"cotangent-gravity\" (G),\n"
+      "                 \"central-cotangent\" (k, center), \"harmonic-pair\" (k, d0),\n"
+      "                 \"lennard-jones\" (epsilon, sigma, cutoff)\n"
+      "  [integrator]   method, dt, t_end, output_every\n"
+      "  Without SCENE: the seed paper's three bodies on S^2 with sesi4, dt = 0.1, t_end = 800.\n"
+      "\nOUTPUTS (in DIR, replaced as a whole when the run ends):\n"
+      "  trajectory.csv   t, then per body b: b<b>_q<i>, b<b>_p<i>, b<b>_x<i>\n"
+      "  diagnostics.csv  t, energy, energy_error, momentum-map components\n"
+      "  exact.csv        exact positions (scenes with an exact solution: the default scene)\n"
+      "  summary.json     settings, energy and momentum-map errors, final state, wall time\n"
+      "\nEXIT STATUS:\n"
+      "  0 done;  2 bad scene or argument (one line on stderr, nothing written);\n"
+      "  3 the state became non-finite (outputs so far kept, \"complete\": false);\n"
+      "  130 interrupted (likewise);  1 other failure (e.g. a write error).\n"
+      "\nA progress bar appears on stderr for runs longer than a second when stderr is a terminal.\n";
+  return text;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  install_check_handler();
+
+  CLI::App app{"sesi: explicit symplectic integration of Hamiltonian dynamics on spheres S^n,\n"
+               "hyperbolic spaces H^n and flat E^n (SESI, the seed paper's scheme, orders 2 to 8).",
+               "sesi"};
+  app.set_version_flag("--version", "sesi 0.1.0");
+  app.require_subcommand(1);
+  app.footer("\nRun 'sesi run --help' for scenes, methods, outputs and exit statuses.");
+
+  RunOptions options;
+  std::string method;
+  double dt = 0.0, t_end = 0.0;
+  long output_every = 0;
+  CLI::App* run = app.add_subcommand("run", "Run a scene and write its trajectory, diagnostics and summary.");
+  run->add_option("SCENE", options.scene_path,
+                  "Scene file (TOML). Without it, the seed paper's three-body scene.")
+      ->type_name("FILE");
+  run->add_option("--out,-o", options.out, "Output directory (default ./sesi-out/<scene name>).")
+      ->type_name("DIR");
+  auto* method_opt =
+      run->add_option("--method,-m", method, "Integration method (see METHODS); replaces the scene's.")
+          ->type_name("M");
+  auto* dt_opt = run->add_option("--dt", dt, "Time step, finite and non-zero (negative runs backwards).")
+                     ->type_name("H");
+  auto* t_end_opt = run->add_option("--t-end", t_end,
+                                    "Length of the run, >= 0 (the last step is shortened to end there).")
+                        ->type_name("T");
+  auto* every_opt =
+      run->add_option("--output-every", output_every, "Steps between output rows, >= 1.")->type_name("N");
+  run->add_flag("--quiet,-q", options.quiet, "No report on stdout and no progress bar.");
+  run->footer(run_footer());
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    print_error(e.what());
+    return exit_bad_input;
+  }
+  if (method_opt->count() > 0) options.method = method;
+  if (dt_opt->count() > 0) options.dt = dt;
+  if (t_end_opt->count() > 0) options.t_end = t_end;
+  if (every_opt->count() > 0) options.output_every = output_every;
+
+  try {
+    return run_command(options);
+  } catch (const InputError& e) {
+    print_error(e.what());
+    return exit_bad_input;
+  } catch (const std::exception& e) {
+    print_error(e.what());
+    return exit_internal;
+  }
+}

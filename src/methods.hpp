@@ -1,0 +1,137 @@
+#pragma once
+/// @file methods.hpp
+/// The methods of `sesi run --method`, registered in ONE place: the `Methods` list below.
+///
+/// A method is a small descriptor: a name, an order, a one-line description and
+/// `make<Sys>(sys)`, which returns a stepper for the system behind a virtual call (AnyStepper).
+/// The composition methods all share one engine per system (RuntimeComposition, with the
+/// table's weights as data), so adding a table costs no compile time. A reference stepper (e.g.
+/// dopri5, gauss4, rattle from include/sesi/reference/) is registered by adding a descriptor
+/// to `Methods` whose `make` wraps it, e.g. in OdeintStyleStepper; that is compiled once per
+/// (space, dimension).
+
+#include <algorithm>
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string_view>
+#include <tuple>
+
+#include <sesi/coefficients.hpp>
+
+#include "runtime_composition.hpp"
+
+namespace sesi::program {
+
+/// A stepper for systems of type Sys, behind a virtual call.
+template <class Sys>
+class AnyStepper {
+ public:
+  using StateType = typename Sys::StateType;
+  virtual ~AnyStepper() = default;
+  /// Advance x from t to t + dt.
+  virtual void step(StateType& x, double t, double dt) = 0;
+};
+
+/// An odeint-style stepper (do_step(sys, x, t, dt)) held with its system.
+template <class Sys, class Stepper>
+class OdeintStyleStepper final : public AnyStepper<Sys> {
+ public:
+  explicit OdeintStyleStepper(const Sys& sys) : sys_(sys) {}
+  void step(typename Sys::StateType& x, double t, double dt) override {
+    stepper_.do_step(std::cref(sys_), x, t, dt);
+  }
+
+ private:
+  const Sys& sys_;
+  Stepper stepper_;
+};
+
+/// A composition (RuntimeComposition) for Sys: one type for every coefficient table.
+template <class Sys>
+class CompositionStepper final : public AnyStepper<Sys> {
+ public:
+  CompositionStepper(const Sys& sys, RuntimeComposition<typename Sys::Chart> engine)
+      : sys_(sys), engine_(std::move(engine)) {}
+  void step(typename Sys::StateType& x, double t, double dt) override { engine_.do_step(sys_, x, t, dt); }
+
+ private:
+  const Sys& sys_;
+  RuntimeComposition<typename Sys::Chart> engine_;
+};
+
+/// A string usable as a template argument (for descriptions in the registry).
+template <std::size_t N>
+struct Text {
+  char value[N];
+  constexpr Text(const char (&text)[N]) { std::copy_n(text, N, value); }  // NOLINT: implicit
+  constexpr std::string_view view() const { return {value, N - 1}; }
+};
+
+/// A symmetric composition of the seed's hierarchical Strang step (as sesi::Composition) with a
+/// coefficient table of include/sesi/coefficients.hpp.
+template <class Table, Text About>
+struct CompositionMethod {
+  static constexpr std::string_view name = Table::name;
+  static constexpr int order = Table::order;
+  static constexpr std::string_view about = About.view();
+  template <class Sys>
+  static std::unique_ptr<AnyStepper<Sys>> make(const Sys& sys) {
+    return std::make_unique<CompositionStepper<Sys>>(
+        sys, RuntimeComposition<typename Sys::Chart>::template of<Table>());
+  }
+};
+
+template <class... Method>
+struct MethodList {};
+
+// clang-format off
+/// Every method of the program. To add one, add its descriptor here (nothing else changes).
+using Methods = MethodList<
+  CompositionMethod<coefficients::Strang,     "Strang splitting, the seed's SESI 2 (1 stage)">,
+  CompositionMethod<coefficients::Yoshida4,   "Yoshida's triple jump, the seed's SESI 4 (3 stages)">,
+  CompositionMethod<coefficients::Suzuki4,    "Suzuki's fractal composition (5 stages)">,
+  CompositionMethod<coefficients::McLachlan4, "McLachlan's SS5, small error constant (5 stages)">,
+  CompositionMethod<coefficients::Yoshida6,   "Yoshida's solution A (7 stages)">,
+  CompositionMethod<coefficients::KahanLi6,   "Kahan and Li's s9odr6a (9 stages)">,
+  CompositionMethod<coefficients::McLachlan8, "McLachlan's SS15 (15 stages)">,
+  CompositionMethod<coefficients::KahanLi8,   "Kahan and Li's s17odr8a (17 stages)">>;
+// clang-format on
+
+/// What --help and the scene checks need to know of a method.
+struct MethodInfo {
+  std::string_view name;
+  int order;
+  std::string_view about;
+};
+
+/// All registered methods, in registration order.
+std::span<const MethodInfo> method_catalogue();
+/// Method names alone (for "did you mean").
+std::span<const std::string_view> method_names();
+/// Is name a registered method?
+bool is_method(std::string_view name);
+
+namespace detail {
+template <class Sys, class... Method>
+std::unique_ptr<AnyStepper<Sys>> make_stepper(MethodList<Method...>, std::string_view name,
+                                              const Sys& sys) {
+  std::unique_ptr<AnyStepper<Sys>> out;
+  const auto try_method = [&]<class M>() {
+    if (name != M::name) return false;
+    out = M::template make<Sys>(sys);
+    return true;
+  };
+  static_cast<void>((try_method.template operator()<Method>() || ...));
+  return out;
+}
+}  // namespace detail
+
+/// The stepper called name for sys (nullptr for an unknown name; scenes are checked before).
+template <class Sys>
+std::unique_ptr<AnyStepper<Sys>> make_stepper(std::string_view name, const Sys& sys) {
+  return detail::make_stepper<Sys>(Methods{}, name, sys);
+}
+
+}  // namespace sesi::program

@@ -1,0 +1,126 @@
+#include "recorder.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+#include "exact_track.hpp"
+#include "validate.hpp"
+
+namespace sesi::program {
+
+namespace {
+int ambient_dim(const SpaceSpec& space) {
+  return space.kind == SpaceKind::euclidean ? space.dim : space.dim + 1;
+}
+
+std::vector<std::string> trajectory_header(const Scene& scene) {
+  std::vector<std::string> names{"t"};
+  const int n = scene.dim(), a = ambient_dim(scene.space);
+  for (int b = 1; b <= scene.body_count(); ++b) {
+    const std::string body = "b" + std::to_string(b) + "_";
+    for (int i = 1; i <= n; ++i) names.push_back(body + "q" + std::to_string(i));
+    for (int i = 1; i <= n; ++i) names.push_back(body + "p" + std::to_string(i));
+    for (int i = 1; i <= a; ++i) names.push_back(body + "x" + std::to_string(i));
+  }
+  return names;
+}
+
+std::vector<std::string> diagnostics_header(const std::vector<std::string>& momentum_names) {
+  std::vector<std::string> names{"t", "energy", "energy_error"};
+  names.insert(names.end(), momentum_names.begin(), momentum_names.end());
+  return names;
+}
+
+void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path temporary = path.string() + ".tmp";
+  std::FILE* file = std::fopen(temporary.c_str(), "w");
+  bool ok = file != nullptr;
+  if (ok) ok = std::fwrite(text.data(), 1, text.size(), file) == text.size();
+  if (file) ok = std::fclose(file) == 0 && ok;
+  if (ok) ok = std::rename(temporary.c_str(), path.c_str()) == 0;
+  if (!ok) throw std::runtime_error("cannot write " + path.string() + ": " + std::strerror(errno));
+}
+}  // namespace
+
+std::vector<std::string> momentum_names(int ambient_dim, bool translations) {
+  std::vector<std::string> names;
+  if (translations) {
+    for (int a = 1; a <= ambient_dim; ++a) names.push_back("P" + std::to_string(a));
+  }
+  for (int a = 1; a <= ambient_dim; ++a) {
+    for (int b = a + 1; b <= ambient_dim; ++b) names.push_back("M" + std::to_string(a) + "_" + std::to_string(b));
+  }
+  return names;
+}
+
+Recorder::Recorder(const Scene& scene, std::filesystem::path dir, std::vector<std::string> momentum_names)
+    : scene_(scene),
+      dir_(std::move(dir)),
+      trajectory_(dir_ / "trajectory.csv", trajectory_header(scene)),
+      diagnostics_(dir_ / "diagnostics.csv", diagnostics_header(momentum_names)) {
+  stats_.momentum_names = std::move(momentum_names);
+  if (scene.exact == ExactSolution::paper) {
+    exact_ = std::make_unique<ExactTrack>(dir_ / "exact.csv", scene.body_count());
+  }
+}
+
+Recorder::~Recorder() = default;
+
+void Recorder::track(double energy, const Eigen::VectorXd& momentum) {
+  if (!tracking_) {
+    tracking_ = true;
+    stats_.energy_initial = energy;
+    stats_.momentum_initial = momentum;
+  }
+  stats_.energy_final = energy;
+  stats_.momentum_final = momentum;
+  const double error = std::abs(energy - stats_.energy_initial);
+  stats_.max_abs_energy_error = std::max(stats_.max_abs_energy_error, error);
+  stats_.max_rel_energy_error = stats_.energy_initial != 0.0
+                                    ? stats_.max_abs_energy_error / std::abs(stats_.energy_initial)
+                                    : std::nan("");
+  if (momentum.size() > 0) {
+    stats_.max_momentum_drift =
+        std::max(stats_.max_momentum_drift, (momentum - stats_.momentum_initial).cwiseAbs().maxCoeff());
+  }
+}
+
+void Recorder::write_row(const Snapshot& s) {
+  row_.assign(1, s.t);
+  for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
+    row_.insert(row_.end(), s.q.col(b).data(), s.q.col(b).data() + s.q.rows());
+    row_.insert(row_.end(), s.p.col(b).data(), s.p.col(b).data() + s.p.rows());
+    row_.insert(row_.end(), s.x.col(b).data(), s.x.col(b).data() + s.x.rows());
+  }
+  trajectory_.row(row_);
+  row_.assign({s.t, s.energy, s.energy - stats_.energy_initial});
+  row_.insert(row_.end(), s.momentum.data(), s.momentum.data() + s.momentum.size());
+  diagnostics_.row(row_);
+  if (exact_) exact_->row(s);
+}
+
+void Recorder::set_final(Snapshot last) { final_ = std::move(last); }
+
+std::vector<double> Recorder::max_exact_error() const {
+  return exact_ ? exact_->max_error() : std::vector<double>{};
+}
+
+void Recorder::finish(const RunOutcome& outcome, double wall_seconds) {
+  trajectory_.close();
+  diagnostics_.close();
+  ExactStats exact;
+  if (exact_) {
+    exact_->close();
+    exact.solution = "paper";
+    exact.max_position_error = exact_->max_error();
+    exact.final_position_error = exact_->last_error();
+  }
+  const long planned = step_count(*scene_.integrator.t_end, *scene_.integrator.dt);
+  const SummaryData data{scene_, outcome, planned, wall_seconds, stats_, final_, exact};
+  write_file_atomically(dir_ / "summary.json", summary_json(data));
+}
+
+}  // namespace sesi::program

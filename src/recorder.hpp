@@ -1,0 +1,62 @@
+#pragma once
+/// @file recorder.hpp
+/// The outputs of a run, written into the (staging) output directory:
+///   trajectory.csv  t, then per body b: chart q, momenta p, embedding x
+///   diagnostics.csv t, energy, energy error, momentum-map components
+///   exact.csv       t, then per body the exact embedding point (scenes with an exact solution)
+///   summary.json    method, step, energy and momentum-map statistics, final state, ...
+/// Rows are written every output_every steps (and at the first and last step); the energy and
+/// momentum-map maxima of the summary are taken over every step.
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "csv_writer.hpp"
+#include "run_types.hpp"
+#include "scene.hpp"
+#include "summary.hpp"
+
+namespace sesi::program {
+
+class ExactTrack;
+
+/// Names of the momentum-map components, in sesi::momentum_map's order: P1..Pn on E^n, then
+/// M1_2, M1_3, ... (1-based ambient indices a < b) of M = sum m (x v^T - v x^T).
+std::vector<std::string> momentum_names(int ambient_dim, bool translations);
+
+class Recorder {
+ public:
+  /// Opens the CSV files in dir and writes their headers.
+  /// @param momentum_names names of the momentum-map components (sesi::momentum_map's order)
+  Recorder(const Scene& scene, std::filesystem::path dir, std::vector<std::string> momentum_names);
+  ~Recorder();
+
+  /// Every step, from the initial state on: conserved quantities for the summary's maxima.
+  void track(double energy, const Eigen::VectorXd& momentum);
+  /// One output row (trajectory, diagnostics, exact).
+  void write_row(const Snapshot& s);
+  /// The last finite state of the run, with velocities (for the summary's final state).
+  void set_final(Snapshot last);
+  /// Closes the CSV files and writes summary.json.
+  void finish(const RunOutcome& outcome, double wall_seconds);
+
+  const InvariantStats& invariants() const { return stats_; }
+  /// Per body, the largest distance from the exact solution (empty without one).
+  std::vector<double> max_exact_error() const;
+
+ private:
+  const Scene& scene_;
+  std::filesystem::path dir_;
+  CsvWriter trajectory_, diagnostics_;
+  std::unique_ptr<ExactTrack> exact_;
+  std::vector<double> row_;
+  bool tracking_ = false;
+  InvariantStats stats_;
+  Snapshot final_;
+};
+
+}  // namespace sesi::program

@@ -1,0 +1,24 @@
+#pragma once
+/// @file run_command.hpp
+/// `sesi run`: read the scene (or take the default), apply the command-line overrides, run it
+/// into a staging directory, publish the outputs, report. Returns the exit status
+/// (errors.hpp); bad input throws InputError before anything is written.
+
+#include <optional>
+#include <string>
+
+namespace sesi::program {
+
+struct RunOptions {
+  std::string scene_path;  ///< empty: the embedded default (the seed's scene)
+  std::string out;         ///< empty: ./sesi-out/<scene name>
+  std::optional<std::string> method;
+  std::optional<double> dt;
+  std::optional<double> t_end;
+  std::optional<long> output_every;
+  bool quiet = false;
+};
+
+int run_command(const RunOptions& options);
+
+}  // namespace sesi::program

@@ -1,0 +1,15 @@
+#include "run_types.hpp"
+
+namespace sesi::program {
+
+const char* stop_reason_name(StopReason reason) {
+  switch (reason) {
+    case StopReason::completed: return "completed";
+    case StopReason::non_finite: return "non-finite state";
+    case StopReason::invariant_failed: return "invariant failed";
+    case StopReason::interrupted: return "interrupted";
+  }
+  return "unknown";
+}
+
+}  // namespace sesi::program

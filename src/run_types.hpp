@@ -1,0 +1,47 @@
+#pragma once
+/// @file run_types.hpp
+/// What the run loop hands to the outputs, and how a run ended. Plain dynamic Eigen types, so
+/// that everything after the loop is compiled once, not once per (space, dimension).
+
+#include <atomic>
+#include <string>
+
+#include <Eigen/Core>
+
+namespace sesi::program {
+
+class ProgressBar;
+
+/// The state of all bodies at one time, in chart and embedding coordinates.
+struct Snapshot {
+  long step = 0;
+  double t = 0.0;
+  Eigen::MatrixXd q, p;  ///< chart coordinates and momenta, dim x bodies
+  Eigen::MatrixXd x, v;  ///< embedding points and velocities, ambient x bodies (v: final only)
+  double energy = 0.0;
+  Eigen::VectorXd momentum;  ///< the momentum map (sesi::momentum_map)
+};
+
+enum class StopReason { completed, non_finite, invariant_failed, interrupted };
+
+/// How a run ended.
+struct RunOutcome {
+  StopReason reason = StopReason::completed;
+  long steps_done = 0;     ///< steps whose result was finite
+  long failed_step = 0;    ///< the step that failed (1-based), 0 if none
+  double failed_t = 0.0;   ///< its end time
+  int failed_body = 0;     ///< 1-based, 0 when not known
+  std::string detail;      ///< what failed, in words
+  bool complete() const { return reason == StopReason::completed; }
+};
+
+/// What the run loop watches besides the state.
+struct RunControl {
+  const std::atomic<bool>* interrupted = nullptr;  ///< set by SIGINT/SIGTERM
+  ProgressBar* progress = nullptr;
+};
+
+/// "completed", "non-finite state", "invariant failed", "interrupted".
+const char* stop_reason_name(StopReason reason);
+
+}  // namespace sesi::program

@@ -1,0 +1,84 @@
+#pragma once
+/// @file scene.hpp
+/// A scene at run time: what a scene file (docs/scene-format.md) or the embedded default holds,
+/// validated and with every body's initial condition in chart coordinates (q, p).
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace sesi::program {
+
+enum class SpaceKind { sphere, hyperbolic, euclidean };
+
+/// "sphere", "hyperbolic", "euclidean".
+std::string_view space_name(SpaceKind kind);
+
+struct SpaceSpec {
+  SpaceKind kind = SpaceKind::sphere;
+  int dim = 2;
+  double radius = 1.0;  ///< 1 (unused) on euclidean
+};
+
+struct Body {
+  double mass = 1.0;
+  Eigen::VectorXd q;  ///< chart coordinates (dim)
+  Eigen::VectorXd p;  ///< conjugate momenta (dim)
+};
+
+// ---- potential terms (one struct per `kind`, the parameters of docs/scene-format.md) ----
+struct ChordWellSpec {
+  double theta0;
+  double strength;
+};
+struct CotangentGravitySpec {
+  double G;
+};
+struct CentralCotangentSpec {
+  double k;
+  Eigen::VectorXd center;  ///< an embedding point
+};
+struct HarmonicPairSpec {
+  double k;
+  double d0;
+};
+struct LennardJonesSpec {
+  double epsilon;
+  double sigma;
+  double cutoff;
+};
+using PotentialSpec = std::variant<ChordWellSpec, CotangentGravitySpec, CentralCotangentSpec,
+                                   HarmonicPairSpec, LennardJonesSpec>;
+
+/// The `kind` string of a potential.
+std::string_view potential_kind(const PotentialSpec& spec);
+
+struct IntegratorSpec {
+  std::string method = "sesi4";
+  std::optional<double> dt;     ///< required by the time the run starts (file or --dt)
+  std::optional<double> t_end;  ///< required by the time the run starts (file or --t-end)
+  long output_every = 1;
+  int line = 0;  ///< line of [integrator] in the scene file (0: none), for messages
+};
+
+/// Exact solutions the program knows (the scene must match them; scene_reader checks).
+enum class ExactSolution { none, paper };
+
+struct Scene {
+  std::string name;    ///< output directory name and summary label
+  std::string source;  ///< the scene file as given, or "<default scene>"
+  SpaceSpec space;
+  std::vector<Body> bodies;
+  std::vector<PotentialSpec> potentials;
+  IntegratorSpec integrator;
+  ExactSolution exact = ExactSolution::none;
+
+  int dim() const { return space.dim; }
+  int body_count() const { return static_cast<int>(bodies.size()); }
+};
+
+}  // namespace sesi::program

@@ -1,0 +1,570 @@
+#include "scene_reader.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <optional>
+#include <sstream>
+
+#include <toml++/toml.h>
+
+#include <sesi/special_functions.hpp>
+
+#include "errors.hpp"
+#include "geometry.hpp"
+#include "paper_scene.hpp"
+#include "suggest.hpp"
+#include "validate.hpp"
+
+namespace sesi::program {
+
+namespace {
+
+using namespace std::string_view_literals;
+
+/// Tolerance on "x is on the space" and "v is tangent at x" (relative).
+constexpr double on_space_tolerance = 1e-9;
+/// Two bodies this close (relative to the space's length scale) are at the same point.
+constexpr double same_point_tolerance = 1e-12;
+
+constexpr std::array space_kinds = {"sphere"sv, "hyperbolic"sv, "euclidean"sv};
+constexpr std::array potential_kinds = {"chord-well"sv, "cotangent-gravity"sv,
+                                        "central-cotangent"sv, "harmonic-pair"sv,
+                                        "lennard-jones"sv};
+constexpr std::array exact_solutions = {"paper"sv};
+
+std::string_view type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a float";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::date: return "a date";
+    case toml::node_type::time: return "a time";
+    case toml::node_type::date_time: return "a date-time";
+    default: return "nothing";
+  }
+}
+
+/// One TOML table being read: its key path ("bodies[2]") and where it is.
+class TableReader {
+ public:
+  TableReader(const toml::table& table, std::string path, const std::string& file)
+      : table_(table), path_(std::move(path)), file_(file) {}
+
+  const std::string& path() const { return path_; }
+  Origin origin() const { return origin_of(table_.source()); }
+  Origin origin_of(const toml::source_region& region) const {
+    return {file_, static_cast<int>(region.begin.line), static_cast<int>(region.begin.column)};
+  }
+  Origin origin_of(std::string_view key) const {
+    const toml::node* node = table_.get(key);
+    return node ? origin_of(node->source()) : origin();
+  }
+  std::string key_path(std::string_view key) const {
+    return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+  }
+  bool has(std::string_view key) const { return table_.contains(key); }
+  const toml::node* get(std::string_view key) const { return table_.get(key); }
+
+  /// Refuse keys not in allowed, suggesting the nearest one.
+  void allow_only(std::span<const std::string_view> allowed, std::string_view what) const {
+    for (auto&& [key, node] : table_) {
+      if (std::find(allowed.begin(), allowed.end(), key.str()) != allowed.end()) continue;
+      const std::string hint = did_you_mean(key.str(), allowed);
+      throw InputError(origin_of(key.source()), key_path(key.str()),
+                       "unknown key in " + std::string(what) +
+                           (hint.empty() ? " (expected " + one_of(allowed) + ")" : hint));
+    }
+  }
+
+  [[noreturn]] void missing(std::string_view key, std::string_view expected) const {
+    throw InputError(origin(), key_path(key), "missing required key (" + std::string(expected) + ")");
+  }
+  [[noreturn]] void fail(std::string_view key, std::string_view message) const {
+    throw InputError(origin_of(key), key_path(key), message);
+  }
+
+  /// A finite number (integers accepted).
+  double number(std::string_view key, std::string_view expected) const {
+    const toml::node* node = get(key);
+    if (!node) missing(key, expected);
+    return to_number(*node, key_path(key), expected);
+  }
+  double number_or(std::string_view key, double fallback, std::string_view expected) const {
+    return has(key) ? number(key, expected) : fallback;
+  }
+  double to_number(const toml::node& node, const std::string& key, std::string_view expected) const {
+    double value = 0.0;
+    if (const auto* i = node.as_integer()) {
+      value = static_cast<double>(i->get());
+    } else if (const auto* f = node.as_floating_point()) {
+      value = f->get();
+    } else {
+      throw InputError(origin_of(node.source()), key,
+                       "expected " + std::string(expected) + ", got " + std::string(type_name(node)));
+    }
+    if (!std::isfinite(value)) {
+      throw InputError(origin_of(node.source()), key,
+                       "expected " + std::string(expected) + ", got " + format_number(value));
+    }
+    return value;
+  }
+
+  long integer(std::string_view key, std::string_view expected) const {
+    const toml::node* node = get(key);
+    if (!node) missing(key, expected);
+    const auto* i = node->as_integer();
+    if (!i) {
+      throw InputError(origin_of(node->source()), key_path(key),
+                       "expected " + std::string(expected) + ", got " + std::string(type_name(*node)));
+    }
+    return static_cast<long>(i->get());
+  }
+
+  std::string string(std::string_view key, std::string_view expected) const {
+    const toml::node* node = get(key);
+    if (!node) missing(key, expected);
+    const auto* s = node->as_string();
+    if (!s) {
+      throw InputError(origin_of(node->source()), key_path(key),
+                       "expected " + std::string(expected) + ", got " + std::string(type_name(*node)));
+    }
+    return s->get();
+  }
+
+  /// An array of `size` finite numbers.
+  Eigen::VectorXd vector(std::string_view key, int size, std::string_view what) const {
+    const toml::node* node = get(key);
+    const std::string expected = "an array of " + std::to_string(size) + " numbers (" + std::string(what) + ")";
+    if (!node) missing(key, expected);
+    const auto* array = node->as_array();
+    if (!array) {
+      throw InputError(origin_of(node->source()), key_path(key),
+                       "expected " + expected + ", got " + std::string(type_name(*node)));
+    }
+    if (static_cast<int>(array->size()) != size) {
+      throw InputError(origin_of(node->source()), key_path(key),
+                       "expected " + expected + ", got " + std::to_string(array->size()) +
+                           (array->size() == 1 ? " number" : " numbers"));
+    }
+    Eigen::VectorXd out(size);
+    for (int k = 0; k < size; ++k) {
+      out[k] = to_number(*array->get(static_cast<std::size_t>(k)),
+                         key_path(key) + "[" + std::to_string(k + 1) + "]", "a finite number");
+    }
+    return out;
+  }
+
+  /// A sub-table, or nullptr when absent.
+  const toml::table* table(std::string_view key) const {
+    const toml::node* node = get(key);
+    if (!node) return nullptr;
+    const auto* t = node->as_table();
+    if (!t) {
+      throw InputError(origin_of(node->source()), key_path(key),
+                       "expected a table [" + std::string(key) + "], got " + std::string(type_name(*node)));
+    }
+    return t;
+  }
+
+  /// An array of tables ([[key]]), empty when absent.
+  std::vector<const toml::table*> tables(std::string_view key) const {
+    std::vector<const toml::table*> out;
+    const toml::node* node = get(key);
+    if (!node) return out;
+    const auto* array = node->as_array();
+    if (!array || !array->is_array_of_tables()) {
+      throw InputError(origin_of(node->source()), key_path(key),
+                       "expected an array of tables [[" + std::string(key) + "]], got " +
+                           std::string(type_name(*node)));
+    }
+    for (const toml::node& element : *array) out.push_back(element.as_table());
+    return out;
+  }
+
+ private:
+  const toml::table& table_;
+  std::string path_;
+  const std::string& file_;
+};
+
+/// Where each body and potential came from, for the checks that involve several of them.
+struct Provenance {
+  std::vector<Origin> bodies;             // the [[bodies]] tables
+  std::vector<std::string> body_position; // "bodies[2].q" or "bodies[2].x"
+  std::vector<Origin> potentials;
+};
+
+class SceneReader {
+ public:
+  SceneReader(const toml::table& root, const std::string& file) : root_(root, "", file), file_(file) {}
+
+  Scene read() {
+    static constexpr std::array keys = {"name"sv, "space"sv, "bodies"sv, "potential"sv,
+                                        "integrator"sv, "exact"sv};
+    root_.allow_only(keys, "the scene");
+    scene_.source = file_;
+    scene_.name = read_name();
+    read_space();
+    read_bodies();
+    read_potentials();
+    read_integrator();
+    check_bodies_apart();
+    read_exact();
+    return std::move(scene_);
+  }
+
+ private:
+  std::string read_name() {
+    if (!root_.has("name")) return std::filesystem::path(file_).stem().string();
+    const std::string name = root_.string("name", "a string (the scene's name)");
+    if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos ||
+        name.find('\0') != std::string::npos) {
+      root_.fail("name", "expected a non-empty name without '/' (it names the output directory), got '" +
+                             name + "'");
+    }
+    return name;
+  }
+
+  void read_space() {
+    const toml::table* table = root_.table("space");
+    if (!table) root_.missing("space", "a table [space] with kind and dim");
+    const TableReader space(*table, "space", file_);
+    static constexpr std::array curved_keys = {"kind"sv, "dim"sv, "radius"sv};
+    static constexpr std::array flat_keys = {"kind"sv, "dim"sv};
+    if (!space.has("kind")) {
+      space.allow_only(curved_keys, "[space]");
+      space.missing("kind", one_of(space_kinds));
+    }
+    const std::string kind = space.string("kind", "a string");
+    if (kind == "sphere") {
+      scene_.space.kind = SpaceKind::sphere;
+    } else if (kind == "hyperbolic") {
+      scene_.space.kind = SpaceKind::hyperbolic;
+    } else if (kind == "euclidean") {
+      scene_.space.kind = SpaceKind::euclidean;
+    } else {
+      space.fail("kind", "unknown space kind '" + kind + "'" + did_you_mean(kind, space_kinds) +
+                             " (expected " + one_of(space_kinds) + ")");
+    }
+    const bool euclidean = scene_.space.kind == SpaceKind::euclidean;
+    if (euclidean) {
+      space.allow_only(flat_keys, "[space] of kind euclidean");
+    } else {
+      space.allow_only(curved_keys, "[space]");
+    }
+    const long dim = space.integer("dim", "an integer from 1 to " + std::to_string(max_dim));
+    if (dim < 1 || dim > max_dim) {
+      space.fail("dim", "expected an integer from 1 to " + std::to_string(max_dim) + ", got " +
+                            std::to_string(dim));
+    }
+    scene_.space.dim = static_cast<int>(dim);
+    if (!euclidean) {
+      scene_.space.radius = space.number_or("radius", 1.0, "a finite number > 0");
+      if (!(scene_.space.radius > 0.0)) {
+        space.fail("radius", "expected a finite number > 0, got " + format_number(scene_.space.radius));
+      }
+    }
+    geometry_.emplace(scene_.space);
+  }
+
+  void read_bodies() {
+    const auto tables = root_.tables("bodies");
+    if (tables.empty()) root_.missing("bodies", "at least one [[bodies]] table");
+    for (std::size_t b = 0; b < tables.size(); ++b) {
+      read_body(TableReader(*tables[b], "bodies[" + std::to_string(b + 1) + "]", file_));
+    }
+  }
+
+  void read_body(const TableReader& body) {
+    static constexpr std::array keys = {"mass"sv, "q"sv, "p"sv, "x"sv, "v"sv};
+    body.allow_only(keys, "[[bodies]]");
+    const Geometry& g = *geometry_;
+    Body out;
+    out.mass = body.number("mass", "a finite number > 0");
+    if (!(out.mass > 0.0)) body.fail("mass", "expected a finite number > 0, got " + format_number(out.mass));
+
+    const bool chart = body.has("q"), embedded = body.has("x");
+    if (chart && embedded) {
+      body.fail("x", "give either q (with p) or x (with v), not both");
+    }
+    if (!chart && !embedded) {
+      body.missing("q", "the position: q (chart coordinates) or x (embedding point)");
+    }
+    const int n = g.dim(), a = g.ambient_dim();
+    const std::string space = space_noun();
+    if (chart) {
+      if (body.has("v")) body.fail("v", "v (an embedding velocity) goes with x; with q give the momenta p");
+      out.q = body.vector("q", n, "chart coordinates");
+      if (const auto bad = g.outside_domain(out.q)) {
+        body.fail("q", "q[" + std::to_string(bad->first + 1) + "] = " + format_number(out.q[bad->first]) +
+                           " is outside the chart's domain: expected " + bad->second);
+      }
+      out.p = body.has("p") ? body.vector("p", n, "conjugate momenta") : Eigen::VectorXd::Zero(n);
+    } else {
+      if (body.has("p")) body.fail("p", "p (chart momenta) goes with q; with x give the velocity v");
+      const Eigen::VectorXd x = body.vector("x", a, "a point of the " + space);
+      const double off = g.constraint_residual(x);
+      if (off > on_space_tolerance) {
+        body.fail("x", "not on the " + space + ": relative residual " + format_short(off) + " > " +
+                           format_number(on_space_tolerance) + residual_hint());
+      }
+      if (!g.on_upper_sheet(x)) {
+        body.fail("x", "not on the hyperboloid's upper sheet: the last coordinate must be > 0");
+      }
+      const Eigen::VectorXd v = body.has("v") ? body.vector("v", a, "a tangent vector at x")
+                                              : Eigen::VectorXd::Zero(a);
+      const double slant = g.tangency_residual(x, v);
+      if (slant > on_space_tolerance) {
+        body.fail("v", "not tangent to the " + space + " at x: relative residual " + format_short(slant) +
+                           " > " + format_number(on_space_tolerance) + tangency_hint());
+      }
+      g.to_chart(x, v, out.mass, out.q, out.p);
+    }
+    const std::string position_key = body.key_path(chart ? "q" : "x");
+    if (!std::isfinite(g.kinetic_energy(out.q, out.p, out.mass))) {
+      throw InputError(body.origin_of(chart ? "q" : "x"), position_key,
+                       "the body sits on a singular point of the chart (a pole of the sphere or the "
+                       "origin of hyperbolic space), where its kinetic energy is not finite; move it "
+                       "off that point");
+    }
+    scene_.bodies.push_back(std::move(out));
+    provenance_.bodies.push_back(body.origin());
+    provenance_.body_position.push_back(position_key);
+  }
+
+  /// "sphere", "hyperboloid", "Euclidean space" (what points lie on).
+  std::string space_noun() const {
+    switch (scene_.space.kind) {
+      case SpaceKind::sphere: return "sphere";
+      case SpaceKind::hyperbolic: return "hyperboloid";
+      case SpaceKind::euclidean: break;
+    }
+    return "Euclidean space";
+  }
+
+  std::string residual_hint() const {
+    switch (scene_.space.kind) {
+      case SpaceKind::sphere: return " (|x| must equal the radius)";
+      case SpaceKind::hyperbolic: return " (x_1^2 + ... + x_n^2 - x_{n+1}^2 must equal -radius^2)";
+      case SpaceKind::euclidean: break;
+    }
+    return "";
+  }
+  std::string tangency_hint() const {
+    return scene_.space.kind == SpaceKind::hyperbolic ? " (the Minkowski product <x, v> must be 0)"
+                                                      : " (x . v must be 0)";
+  }
+
+  void read_potentials() {
+    const auto tables = root_.tables("potential");
+    for (std::size_t k = 0; k < tables.size(); ++k) {
+      const TableReader term(*tables[k], "potential[" + std::to_string(k + 1) + "]", file_);
+      scene_.potentials.push_back(read_potential(term));
+      provenance_.potentials.push_back(term.origin());
+    }
+  }
+
+  PotentialSpec read_potential(const TableReader& term) {
+    if (!term.has("kind")) {
+      static constexpr std::array any_keys = {"kind"sv,    "theta0"sv,  "strength"sv, "G"sv,
+                                              "k"sv,       "center"sv,  "d0"sv,       "epsilon"sv,
+                                              "sigma"sv,   "cutoff"sv};
+      term.allow_only(any_keys, "[[potential]]");
+      term.missing("kind", "one of " + one_of(potential_kinds));
+    }
+    const std::string kind = term.string("kind", "a string");
+    if (kind == "chord-well") {
+      static constexpr std::array keys = {"kind"sv, "theta0"sv, "strength"sv};
+      term.allow_only(keys, "a chord-well potential");
+      ChordWellSpec spec{term.number("theta0", "a finite angle in [0, pi]"),
+                         term.number_or("strength", 2.0, "a finite number")};
+      if (spec.theta0 < 0.0 || spec.theta0 > std::numbers::pi) {
+        term.fail("theta0", "expected an angle in [0, pi], got " + format_number(spec.theta0));
+      }
+      return spec;
+    }
+    if (kind == "cotangent-gravity") {
+      static constexpr std::array keys = {"kind"sv, "G"sv};
+      term.allow_only(keys, "a cotangent-gravity potential");
+      return CotangentGravitySpec{term.number_or("G", 1.0, "a finite number")};
+    }
+    if (kind == "central-cotangent") {
+      static constexpr std::array keys = {"kind"sv, "k"sv, "center"sv};
+      term.allow_only(keys, "a central-cotangent potential");
+      CentralCotangentSpec spec{term.number_or("k", 1.0, "a finite number"),
+                                term.vector("center", geometry_->ambient_dim(), "a point of the space")};
+      const double off = geometry_->constraint_residual(spec.center);
+      if (off > on_space_tolerance || !geometry_->on_upper_sheet(spec.center)) {
+        term.fail("center", "not on the " + space_noun() + ": relative residual " + format_short(off) +
+                                residual_hint());
+      }
+      return spec;
+    }
+    if (kind == "harmonic-pair") {
+      static constexpr std::array keys = {"kind"sv, "k"sv, "d0"sv};
+      term.allow_only(keys, "a harmonic-pair potential");
+      HarmonicPairSpec spec{term.number_or("k", 1.0, "a finite number"),
+                            term.number_or("d0", 0.0, "a finite distance >= 0")};
+      if (spec.d0 < 0.0) term.fail("d0", "expected a finite distance >= 0, got " + format_number(spec.d0));
+      return spec;
+    }
+    if (kind == "lennard-jones") {
+      static constexpr std::array keys = {"kind"sv, "epsilon"sv, "sigma"sv, "cutoff"sv};
+      term.allow_only(keys, "a lennard-jones potential");
+      LennardJonesSpec spec{term.number_or("epsilon", 1.0, "a finite number >= 0"),
+                            term.number_or("sigma", 1.0, "a finite number > 0"), 0.0};
+      spec.cutoff = term.number_or("cutoff", 2.5 * spec.sigma, "a finite distance > 0");
+      if (spec.epsilon < 0.0) term.fail("epsilon", "expected a finite number >= 0, got " + format_number(spec.epsilon));
+      if (!(spec.sigma > 0.0)) term.fail("sigma", "expected a finite number > 0, got " + format_number(spec.sigma));
+      if (!(spec.cutoff > 0.0)) term.fail("cutoff", "expected a finite distance > 0, got " + format_number(spec.cutoff));
+      return spec;
+    }
+    term.fail("kind", "unknown potential kind '" + kind + "'" + did_you_mean(kind, potential_kinds) +
+                          " (expected " + one_of(potential_kinds) + ")");
+  }
+
+  void read_integrator() {
+    const toml::table* table = root_.table("integrator");
+    if (!table) return;  // every setting may come from the command line
+    const TableReader in(*table, "integrator", file_);
+    scene_.integrator.line = in.origin().line;
+    static constexpr std::array keys = {"method"sv, "dt"sv, "t_end"sv, "output_every"sv};
+    in.allow_only(keys, "[integrator]");
+    IntegratorSpec& spec = scene_.integrator;
+    if (in.has("method")) {
+      spec.method = in.string("method", "a method name");
+      check_method(spec.method, in.origin_of("method"), in.key_path("method"));
+    }
+    if (in.has("dt")) {
+      spec.dt = in.number("dt", "a finite, non-zero step");
+      check_dt(*spec.dt, in.origin_of("dt"), in.key_path("dt"));
+    }
+    if (in.has("t_end")) {
+      spec.t_end = in.number("t_end", "a finite end time >= 0");
+      check_t_end(*spec.t_end, in.origin_of("t_end"), in.key_path("t_end"));
+    }
+    if (in.has("output_every")) {
+      spec.output_every = in.integer("output_every", "an integer >= 1");
+      check_output_every(spec.output_every, in.origin_of("output_every"), in.key_path("output_every"));
+    }
+    if (spec.dt && spec.t_end) check_step_count(*spec.t_end, *spec.dt, in.origin(), in.path());
+  }
+
+  /// No two bodies (or a body and a center) where a potential is singular.
+  void check_bodies_apart() {
+    const Geometry& g = *geometry_;
+    const int count = scene_.body_count();
+    const double scale = g.length_scale();
+    const bool sphere = scene_.space.kind == SpaceKind::sphere;
+    const double antipodal = std::numbers::pi * scene_.space.radius;
+    std::vector<Eigen::VectorXd> x;
+    for (const Body& b : scene_.bodies) x.push_back(g.embed(b.q));
+    for (std::size_t k = 0; k < scene_.potentials.size(); ++k) {
+      const PotentialSpec& spec = scene_.potentials[k];
+      const std::string term = std::string(potential_kind(spec)) + " potential (potential[" +
+                               std::to_string(k + 1) + "])";
+      if (const auto* center = std::get_if<CentralCotangentSpec>(&spec)) {
+        for (int i = 0; i < count; ++i) {
+          const double d = g.distance(x[i], center->center);
+          if (d <= same_point_tolerance * scale) body_error(i, "at the center of the " + term + ", where it is singular");
+          if (sphere && d >= antipodal * (1 - same_point_tolerance)) {
+            body_error(i, "antipodal to the center of the " + term + ", where it is singular");
+          }
+        }
+        continue;
+      }
+      const bool singular_at_contact = !std::holds_alternative<HarmonicPairSpec>(spec);
+      for (int j = 1; j < count; ++j) {
+        for (int i = 0; i < j; ++i) {
+          const double d = g.distance(x[i], x[j]);
+          const std::string pair = " and bodies[" + std::to_string(i + 1) + "]";
+          if (singular_at_contact && d <= same_point_tolerance * scale) {
+            body_error(j, "at the same point as bodies[" + std::to_string(i + 1) + "], where the " +
+                              term + " is singular");
+          }
+          if (std::holds_alternative<CotangentGravitySpec>(spec) && sphere &&
+              d >= antipodal * (1 - same_point_tolerance)) {
+            body_error(j, "antipodal to bodies[" + std::to_string(i + 1) + "], where the " + term +
+                              " is singular");
+          }
+          if (std::holds_alternative<ChordWellSpec>(spec)) {
+            // s = chord / (sqrt(3) R) must stay below 1 (the well's square root).
+            const double kappa = sphere ? 1 / (scale * scale) : scene_.space.kind == SpaceKind::hyperbolic ? -1 / (scale * scale) : 0.0;
+            const double chord = 2 * sesi::special::sn(kappa, d / 2);
+            const double s = chord / (std::numbers::sqrt3 * scale);
+            if (!(s < 1.0)) {
+              body_error(j, "too far from bodies[" + std::to_string(i + 1) + "] for the " + term +
+                                ": chord " + format_number(chord) + ", expected < sqrt(3) * " +
+                                (sphere || scene_.space.kind == SpaceKind::hyperbolic ? "radius" : "1"));
+            }
+          }
+        }
+      }
+    }
+  }
+
+  [[noreturn]] void body_error(int b, const std::string& message) const {
+    throw InputError(provenance_.bodies[static_cast<std::size_t>(b)],
+                     provenance_.body_position[static_cast<std::size_t>(b)], message);
+  }
+
+  void read_exact() {
+    if (!root_.has("exact")) return;
+    const std::string exact = root_.string("exact", "a string");
+    if (exact != "paper") {
+      root_.fail("exact", "unknown exact solution '" + exact + "'" + did_you_mean(exact, exact_solutions) +
+                              " (expected " + one_of(exact_solutions) + ")");
+    }
+    if (const std::string mismatch = paper_scene_mismatch(scene_); !mismatch.empty()) {
+      root_.fail("exact", "the 'paper' solution is exact only for the seed's scene, but " + mismatch);
+    }
+    scene_.exact = ExactSolution::paper;
+  }
+
+  static constexpr int max_dim = 1000;
+
+  TableReader root_;
+  const std::string& file_;
+  Scene scene_;
+  std::optional<Geometry> geometry_;
+  Provenance provenance_;
+};
+
+}  // namespace
+
+Scene read_scene_text(std::string_view text, const std::string& path) {
+  toml::table root;
+  try {
+    root = toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    const auto& where = e.source().begin;
+    throw InputError(Origin{path, static_cast<int>(where.line), static_cast<int>(where.column)}, "",
+                     "TOML syntax error: " + std::string(e.description()));
+  }
+  return SceneReader(root, path).read();
+}
+
+Scene read_scene_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw InputError(Origin{path}, "", "expected a scene file, got a directory");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw InputError(Origin{path}, "", std::string("cannot read the scene file: ") + std::strerror(errno));
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return read_scene_text(text.str(), path);
+}
+
+}  // namespace sesi::program

@@ -1,0 +1,110 @@
+#include "summary.hpp"
+
+#include "json_writer.hpp"
+#include "methods.hpp"
+#include "validate.hpp"
+
+namespace sesi::program {
+
+namespace {
+void write_space(JsonWriter& json, const Scene& scene) {
+  json.begin_object("space");
+  json.string("kind", space_name(scene.space.kind));
+  json.integer("dim", scene.space.dim);
+  if (scene.space.kind != SpaceKind::euclidean) json.number("radius", scene.space.radius);
+  json.end_object();
+}
+
+void write_final_state(JsonWriter& json, const Snapshot& s) {
+  json.begin_object("final_state");
+  json.integer("step", s.step);
+  json.number("t", s.t);
+  json.begin_array("bodies");
+  for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
+    json.begin_object();
+    json.numbers("q", Eigen::VectorXd(s.q.col(b)));
+    json.numbers("p", Eigen::VectorXd(s.p.col(b)));
+    json.numbers("x", Eigen::VectorXd(s.x.col(b)));
+    json.numbers("v", Eigen::VectorXd(s.v.col(b)));
+    json.end_object();
+  }
+  json.end_array();
+  json.end_object();
+}
+
+int method_order(std::string_view name) {
+  for (const MethodInfo& m : method_catalogue()) {
+    if (m.name == name) return m.order;
+  }
+  return 0;
+}
+}  // namespace
+
+std::string summary_json(const SummaryData& d) {
+  const Scene& scene = d.scene;
+  const InvariantStats& inv = d.invariants;
+  JsonWriter json;
+  json.begin_object();
+  json.string("scene", scene.name);
+  json.string("source", scene.source);
+  json.boolean("complete", d.outcome.complete());
+  json.string("stop_reason", stop_reason_name(d.outcome.reason));
+  write_space(json, scene);
+  json.integer("bodies", scene.body_count());
+  json.begin_array("potentials");
+  for (const PotentialSpec& p : scene.potentials) json.string("", potential_kind(p));
+  json.end_array();
+  json.string("method", scene.integrator.method);
+  json.integer("order", method_order(scene.integrator.method));
+  json.number("dt", *scene.integrator.dt);
+  json.integer("steps", d.outcome.steps_done);
+  json.integer("planned_steps", d.planned_steps);
+  json.number("t_end", *scene.integrator.t_end);
+  json.integer("output_every", scene.integrator.output_every);
+  json.number("wall_seconds", d.wall_seconds);
+
+  json.begin_object("energy");
+  json.number("initial", inv.energy_initial);
+  json.number("final", inv.energy_final);
+  json.number("max_abs_error", inv.max_abs_energy_error);
+  json.number("max_rel_error", inv.max_rel_energy_error);
+  json.end_object();
+
+  json.begin_object("momentum_map");
+  json.begin_array("components");
+  for (const std::string& name : inv.momentum_names) json.string("", name);
+  json.end_array();
+  json.numbers("initial", inv.momentum_initial);
+  json.numbers("final", inv.momentum_final);
+  json.number("max_abs_drift", inv.max_momentum_drift);
+  json.end_object();
+
+  write_final_state(json, d.final_state);
+
+  if (!d.exact.solution.empty()) {
+    json.begin_object("exact");
+    json.string("solution", d.exact.solution);
+    json.numbers("max_position_error", d.exact.max_position_error);
+    json.numbers("final_position_error", d.exact.final_position_error);
+    json.end_object();
+  }
+  if (!d.outcome.complete()) {
+    json.begin_object("failure");
+    json.string("reason", stop_reason_name(d.outcome.reason));
+    if (d.outcome.failed_step > 0) {
+      json.integer("step", d.outcome.failed_step);
+      json.number("t", d.outcome.failed_t);
+    }
+    if (d.outcome.failed_body > 0) {
+      json.integer("body", d.outcome.failed_body);
+    } else {
+      json.null("body");
+    }
+    json.string("message", d.outcome.detail);
+    json.end_object();
+  }
+  json.end_object();
+  return json.text();
+}
+
+}  // namespace sesi::program

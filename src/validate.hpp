@@ -1,0 +1,31 @@
+#pragma once
+/// @file validate.hpp
+/// Rules on values shared by the scene reader and the command-line overrides. Each throws
+/// InputError naming the origin and key when the value breaks the rule.
+
+#include <string>
+#include <string_view>
+
+#include "errors.hpp"
+#include "scene.hpp"
+
+namespace sesi::program {
+
+/// The most steps a run may take (t_end / |dt|).
+inline constexpr double max_steps = 1e12;
+
+void check_method(std::string_view method, const Origin& origin, std::string_view key);
+/// dt: finite and non-zero (negative integrates backwards in time).
+void check_dt(double dt, const Origin& origin, std::string_view key);
+/// t_end: finite and >= 0.
+void check_t_end(double t_end, const Origin& origin, std::string_view key);
+/// output_every: >= 1.
+void check_output_every(long output_every, const Origin& origin, std::string_view key);
+/// t_end / |dt| within max_steps (both already checked on their own).
+void check_step_count(double t_end, double dt, const Origin& origin, std::string_view key);
+
+/// The number of steps of a run: ceil(t_end / |dt|) up to round-off (the last step is
+/// shortened to end exactly at t_end).
+long step_count(double t_end, double dt);
+
+}  // namespace sesi::program
