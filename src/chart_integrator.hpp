@@ -48,9 +48,17 @@ class ChartIntegrator final : public Integrator {
   ChartIntegrator& operator=(const ChartIntegrator&) = delete;
 
   void step(double t, double h) override { stepper_->step(x_, t, h); }
+  /// In the scene's own chart: bodies re-charted by the stepper are mapped back (q and p of
+  /// the outputs and of summary.json always mean the same coordinates).
   void read(Eigen::MatrixXd& q, Eigen::MatrixXd& p) const override {
-    q = x_.q;
-    p = x_.p;
+    if (x_.framed()) {
+      const auto world = sesi::in_world_chart(sys_, x_);
+      q = world.q;
+      p = world.p;
+    } else {
+      q = x_.q;
+      p = x_.p;
+    }
   }
 
  private:

@@ -4,8 +4,10 @@
 ///
 /// A method is a small descriptor: a name, an order, a one-line description and
 /// `make<Sys>(sys)`, which returns a stepper for the system behind a virtual call (AnyStepper).
-/// The composition methods all share one engine per system (RuntimeComposition, with the
-/// table's weights as data), so adding a table costs no compile time. A reference stepper (e.g.
+/// The composition methods all share one engine per system (sesi::Composition over
+/// coefficients::Runtime, the table's weights as data), so adding a table costs no compile time.
+/// On S^n and H^n the engine re-charts bodies near their chart's singular set between steps
+/// (sesi::Recharting, docs/charts.md), so scenes may cross poles and go far out. A reference stepper (e.g.
 /// dopri5, gauss4, rattle from include/sesi/reference/) is registered by adding a descriptor
 /// to `Methods` whose `make` wraps it, e.g. in OdeintStyleStepper; that is compiled once per
 /// (space, dimension).
@@ -17,10 +19,12 @@
 #include <span>
 #include <string_view>
 #include <tuple>
+#include <type_traits>
+#include <vector>
 
 #include <sesi/coefficients.hpp>
-
-#include "runtime_composition.hpp"
+#include <sesi/recharting.hpp>
+#include <sesi/stepper.hpp>
 
 namespace sesi::program {
 
@@ -48,17 +52,38 @@ class OdeintStyleStepper final : public AnyStepper<Sys> {
   Stepper stepper_;
 };
 
-/// A composition (RuntimeComposition) for Sys: one type for every coefficient table.
+/// The composition engine of the program for a chart: one type for every coefficient table,
+/// re-charting where the chart allows it.
+template <class Chart>
+using ProgramComposition =
+    std::conditional_t<sesi::Rechartable<Chart>,
+                       sesi::Recharting<sesi::Composition<coefficients::Runtime, Chart>>,
+                       sesi::Composition<coefficients::Runtime, Chart>>;
+
+/// A composition with the weights of Table, as ProgramComposition.
+template <class Table, class Chart>
+ProgramComposition<Chart> make_composition() {
+  auto engine = sesi::Composition<coefficients::Runtime, Chart>::template of<Table>();
+  if constexpr (sesi::Rechartable<Chart>) {
+    return ProgramComposition<Chart>(sesi::RechartPolicy<typename Chart::Scalar>{}, std::move(engine));
+  } else {
+    return engine;
+  }
+}
+
+/// A composition for Sys: one type for every coefficient table.
 template <class Sys>
 class CompositionStepper final : public AnyStepper<Sys> {
  public:
-  CompositionStepper(const Sys& sys, RuntimeComposition<typename Sys::Chart> engine)
+  CompositionStepper(const Sys& sys, ProgramComposition<typename Sys::Chart> engine)
       : sys_(sys), engine_(std::move(engine)) {}
-  void step(typename Sys::StateType& x, double t, double dt) override { engine_.do_step(sys_, x, t, dt); }
+  void step(typename Sys::StateType& x, double t, double dt) override {
+    engine_.do_step(std::cref(sys_), x, t, dt);
+  }
 
  private:
   const Sys& sys_;
-  RuntimeComposition<typename Sys::Chart> engine_;
+  ProgramComposition<typename Sys::Chart> engine_;
 };
 
 /// A string usable as a template argument (for descriptions in the registry).
@@ -79,7 +104,7 @@ struct CompositionMethod {
   template <class Sys>
   static std::unique_ptr<AnyStepper<Sys>> make(const Sys& sys) {
     return std::make_unique<CompositionStepper<Sys>>(
-        sys, RuntimeComposition<typename Sys::Chart>::template of<Table>());
+        sys, make_composition<Table, typename Sys::Chart>());
   }
 };
 

@@ -147,4 +147,13 @@ struct KahanLi8 {
   }
 };
 
+/// Marks a table chosen at run time: Composition<coefficients::Runtime, Chart>(weights, order)
+/// holds the weights as data, so that one engine serves every table (e.g. a program picking the
+/// method by name); Composition<...>::of<Table>() fills them from a table above.
+struct Runtime {
+  static constexpr std::string_view name = "runtime";
+  static constexpr unsigned short order = 0;  // known only at run time
+  static constexpr std::size_t stages = 0;
+};
+
 }  // namespace sesi::coefficients

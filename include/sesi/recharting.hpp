@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <functional>
 #include <type_traits>
+#include <utility>
 
 #include <Eigen/Core>
 
@@ -82,6 +83,38 @@ int rechart(const Sys& sys, State<typename Sys::Chart>& s,
   }
 }
 
+/// The same state in the identity frames (the space's own chart): q, p of each body recomputed
+/// from its world point and velocity (the cotangent lift again, so the map is canonical), frames
+/// dropped. For output in the scene's chart; a body on the chart's singular set gets the chart's
+/// conventional angles there (EmbeddedChart::chart).
+template <class Sys>
+State<typename Sys::Chart> in_world_chart(const Sys& sys, const State<typename Sys::Chart>& s) {
+  using Chart = typename Sys::Chart;
+  State<Chart> out(s.q.rows(), s.bodies());
+  out.q = s.q;
+  out.p = s.p;
+  if constexpr (Rechartable<Chart>) {
+    if (!s.framed()) return out;
+    const Chart& chart = sys.chart();
+    typename Chart::Point q(chart.dim()), p(chart.dim());
+    typename Chart::Ambient x(chart.ambient_dim()), v(chart.ambient_dim());
+    for (int b = 0; b < s.bodies(); ++b) {
+      const auto& frame = s.frames[static_cast<std::size_t>(b)];
+      q = s.q.col(b);
+      p = s.p.col(b);
+      chart.embed(q, x);
+      chart.velocity(q, p, sys.mass(b), v);
+      x = (frame * x).eval();
+      v = (frame * v).eval();
+      chart.chart(x, q);
+      chart.momentum(q, v, sys.mass(b), p);
+      out.q.col(b) = q;
+      out.p.col(b) = p;
+    }
+  }
+  return out;
+}
+
 /// A stepper that re-charts after every step: Method's step, then rechart().
 template <class Method>
 class Recharting : public Method {
@@ -91,7 +124,10 @@ class Recharting : public Method {
   using Scalar = typename Method::value_type;
 
   Recharting() = default;
-  explicit Recharting(RechartPolicy<Scalar> policy) : policy_(policy) {}
+  /// The policy, then the method's own constructor arguments (e.g. a runtime table's weights).
+  template <class... Args>
+  explicit Recharting(RechartPolicy<Scalar> policy, Args&&... method_args)
+      : Method(std::forward<Args>(method_args)...), policy_(policy) {}
 
   template <class Sys>
   void do_step(Sys&& system, state_type& x, time_type t, time_type dt) {

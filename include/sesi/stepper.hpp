@@ -14,6 +14,9 @@
 #include <array>
 #include <functional>
 #include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
 
 #include "sesi/chart.hpp"
 #include "sesi/coefficients.hpp"
@@ -40,9 +43,14 @@ struct unwrap<std::reference_wrapper<T>> {
 };
 }  // namespace detail
 
+/// A symmetric composition of the base step over the weights of Table (coefficients.hpp), or,
+/// with Table = coefficients::Runtime, over weights given at run time (same engine, same
+/// operations: the two step bit for bit alike).
 template <class Table, HierarchicalChart Chart,
           Splitting Form = Splitting::drift_kick_drift>
 class Composition {
+  static constexpr bool runtime_table = std::is_same_v<Table, coefficients::Runtime>;
+
  public:
   using Scalar = typename Chart::Scalar;
   using state_type = State<Chart>;
@@ -51,14 +59,34 @@ class Composition {
   using time_type = Scalar;
   using order_type = unsigned short;
   using table = Table;
+  using weights_type = std::conditional_t<runtime_table, std::vector<Scalar>,
+                                          std::array<Scalar, Table::stages>>;
 
+  /// The table's order (0 for a runtime table: ask order()).
   static constexpr order_type order_value = Table::order;
-  static constexpr order_type order() { return Table::order; }
-  static constexpr std::size_t stages() { return Table::stages; }
 
-  Composition() : w_(Table::template weights<Scalar>()) {}
+  Composition() requires(!runtime_table) : w_(Table::template weights<Scalar>()) {}
+  /// A runtime table: palindromic weights summing to 1, of the given order.
+  Composition(std::vector<Scalar> weights, order_type order) requires runtime_table
+      : w_(std::move(weights)), order_(order) {
+    SESI_CHECK(!w_.empty(), "a composition needs at least one stage");
+  }
+  /// A runtime-table composition with the weights and order of a fixed table T.
+  template <class T>
+  static Composition of() requires runtime_table {
+    const auto w = T::template weights<Scalar>();
+    return Composition(std::vector<Scalar>(w.begin(), w.end()), T::order);
+  }
 
-  const std::array<Scalar, Table::stages>& weights() const { return w_; }
+  order_type order() const {
+    if constexpr (runtime_table) {
+      return order_;
+    } else {
+      return Table::order;
+    }
+  }
+  std::size_t stages() const { return w_.size(); }
+  const weights_type& weights() const { return w_; }
 
   /// Advance x from t to t + dt in place (odeint's do_step(sys, x, t, dt)).
   template <class Sys>
@@ -121,7 +149,7 @@ class Composition {
   template <class Sys>
   void step_dkd(const Sys& sys, state_type& x, Scalar dt) {
     const int top = sys.dim() - 1;
-    const std::size_t s = Table::stages;
+    const std::size_t s = w_.size();
     Scalar pending = w_[0] * dt / Scalar(2);  // level-0 flow carried over from the last stage
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar half = w_[k] * dt / Scalar(2);
@@ -136,7 +164,7 @@ class Composition {
   template <class Sys>
   void step_kdk(const Sys& sys, state_type& x, Scalar dt) {
     const int top = sys.dim() - 1;
-    const std::size_t s = Table::stages;
+    const std::size_t s = w_.size();
     Scalar pending = w_[0] * dt / Scalar(2);  // half kick carried over from the last stage
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar h = w_[k] * dt;
@@ -154,7 +182,8 @@ class Composition {
     sys.kick_cached(x, pending, ws_);
   }
 
-  std::array<Scalar, Table::stages> w_;
+  weights_type w_;
+  [[no_unique_address]] std::conditional_t<runtime_table, order_type, std::monostate> order_{};
   Workspace<Chart> ws_;
   typename state_type::Matrix last_q_;  // q after the last step: its trig is in ws_
 };

@@ -1,6 +1,6 @@
-// The program's composition engine with a runtime table (src/runtime_composition.hpp) must step
-// exactly as the library's sesi::Composition with the same table: same operations in the same
-// order, so bit-identical states.
+// A composition over a runtime table (sesi::Composition<coefficients::Runtime, Chart>, the
+// program's engine) must step exactly as the one over the same compile-time table: same
+// operations in the same order, so bit-identical states.
 #include <doctest/doctest.h>
 
 #include <sesi/coefficients.hpp>
@@ -11,8 +11,6 @@
 #include <sesi/stepper.hpp>
 #include <sesi/system.hpp>
 
-#include "runtime_composition.hpp"
-
 namespace {
 
 /// Step both engines n times from x with step dt; they must agree exactly after every step.
@@ -20,7 +18,9 @@ template <class Table, class Sys>
 void expect_identical(const Sys& sys, typename Sys::StateType x, double dt, int n) {
   using Chart = typename Sys::Chart;
   sesi::Composition<Table, Chart> library;
-  auto runtime = sesi::program::RuntimeComposition<Chart>::template of<Table>();
+  auto runtime = sesi::Composition<sesi::coefficients::Runtime, Chart>::template of<Table>();
+  REQUIRE(runtime.order() == library.order());
+  REQUIRE(runtime.stages() == library.stages());
   auto y = x;
   for (int k = 0; k < n; ++k) {
     library.do_step(std::cref(sys), x, k * dt, dt);

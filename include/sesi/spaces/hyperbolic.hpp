@@ -153,7 +153,11 @@ class Hyperbolic {
     refresh(q, t);
     v.resize(ambient_dim());
     v[dim_] = radius_ * t.s[0] * qd[0];
-    detail::unit_sphere_push(t, qd, 1, dim_, radius_ * t.s[0], radius_ * t.c[0] * qd[0], v);
+    if constexpr (N == 1) {
+      v[0] = radius_ * t.c[0] * qd[0];  // u_0 = (1); spelled out, GCC 12 misreads the general path
+    } else {
+      detail::unit_sphere_push(t, qd, 1, dim_, radius_ * t.s[0], radius_ * t.c[0] * qd[0], v);
+    }
   }
   /// Chart coordinates of a hyperboloid point.
   void chart(const Ambient& x, Point& q) const {
@@ -186,6 +190,7 @@ class Hyperbolic {
     using std::abs;
     using std::sin;
     if (abs(q[0]) > policy.max_radius) return true;
+    if constexpr (N == 1) return false;  // no angles (GCC 12 misreads the loop for H^1)
     if (dim_ >= 2 && q[0] < policy.min_radius) return true;
     for (int k = 1; k + 1 < dim_; ++k) {
       if (abs(sin(q[k])) < policy.min_sine) return true;
@@ -227,10 +232,10 @@ class Hyperbolic {
     detail::complete_orthonormal(lead, rest);
     const Ambient uu = x / radius_;
     change.resize(n + 1, n + 1);
-    if (n == 1) {
+    if (N == 1 || n == 1) {
       change.col(0) = to_u(rest.col(0));
       change.col(1) = uu;
-    } else {
+    } else if constexpr (N != 1) {  // discarded for H^1, where GCC 12 misreads it (-Warray-bounds)
       const Scalar r0 = policy.home_radius;
       const Ambient nhat = to_u(rest.col(1));
       change.col(0) = -sinh(r0) * uu + cosh(r0) * nhat;
