@@ -1,6 +1,6 @@
 #pragma once
 /// @file summary.hpp
-/// The content of summary.json (docs/program.md lists every field).
+/// The content of summary.json (docs/scene-format.md, Outputs, lists the fields).
 
 #include <string>
 #include <vector>
