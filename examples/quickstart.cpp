@@ -23,4 +23,13 @@ int main() {
   std::printf("momentum map (L_z, -L_y, L_x): %s\n", "see sesi::momentum_map");
   const auto m = sesi::momentum_map(sys, x);
   std::printf("  %.12f %.12f %.12f\n", m[0], m[1], m[2]);
+
+  // The method chosen at run time: one engine, the table's weights as data (docs/scheme.md).
+  {
+    auto stepper = sesi::Composition<sesi::coefficients::Runtime, sesi::Sphere<2>>::of<
+        sesi::coefficients::KahanLi6>();  // or (weights, order) from anywhere
+    for (int k = 0; k < 100; ++k) stepper.do_step(sys, x, k * 0.01, 0.01);
+    std::printf("order %d, %zu stages; energy error %.3g\n", stepper.order(), stepper.stages(),
+                sys.energy(x) - e0);
+  }
 }
