@@ -68,7 +68,7 @@ template <class C>
 concept MetricSpace = EmbeddedChart<C> && requires(const C& c, const typename C::Ambient& x,
                                                    typename C::Ambient& g) {
   { c.distance(x, x) } -> std::convertible_to<typename C::Scalar>;
-  c.distance_gradient(x, x, g);  // g = d(distance)/dx at the first argument, tangent to the space
+  c.distance_gradient(x, x, g);  // g = Euclidean d(distance)/dx at the first argument (tangent on S^n, eta g tangent on H^n)
   { c.curvature() } -> std::convertible_to<typename C::Scalar>;
 };
 

@@ -1,0 +1,120 @@
+// The generic path equals the cached fast path to round-off (issue #2): a chart that forwards
+// only the concept members of a built-in space (the HierarchicalChart minimum, the embedding
+// and the distance; no level_flow, no trig cache) is integrated through chart.hpp's generic
+// level flow and the system's uncached embedding, and must give the built-in chart's results.
+//
+// The bound: the two paths compute each increment differently (1/sin^2 through inv_sin2 and
+// cot versus cached sines and their reciprocals; the pull-back from q versus from the cache),
+// each with a relative error of a few eps per factor, at most n + 4 factors. Per step and
+// stage, 2n level flows and one kick: (2n + 1)(n + 4) eps times the state's size per stage.
+// Over N steps the differences add up (the maps' Jacobians are 1 + O(tau) at tau = 0.05 over
+// T = 0.5, a growth below e^(L T) < 2 for these scenes): bound = 2 N s (2n + 1)(n + 4) eps |z|.
+// Any difference in the maths (a missing term in a level flow, a wrong sign of dK/dq) is O(tau).
+#include <cmath>
+#include <tuple>
+
+#include <doctest/doctest.h>
+
+#include "common.hpp"
+
+namespace {
+
+using namespace coretest;
+namespace co = sesi::coefficients;
+
+/// Only the concepts' members of Inner, forwarded.
+template <class Inner>
+class Forwarding {
+ public:
+  using Scalar = typename Inner::Scalar;
+  using Point = typename Inner::Point;
+  using Ambient = typename Inner::Ambient;
+  static constexpr int dimension = Inner::dimension;
+  static constexpr int ambient_dimension = Inner::ambient_dimension;
+
+  explicit Forwarding(Inner inner) : inner_(std::move(inner)) {}
+
+  int dim() const { return inner_.dim(); }
+  Scalar kinetic(int i, const Point& q, Scalar pi, Scalar m) const {
+    return inner_.kinetic(i, q, pi, m);
+  }
+  Scalar kinetic_dp(int i, const Point& q, Scalar pi, Scalar m) const {
+    return inner_.kinetic_dp(i, q, pi, m);
+  }
+  Scalar kinetic_dq(int i, int k, const Point& q, Scalar pi, Scalar m) const {
+    return inner_.kinetic_dq(i, k, q, pi, m);
+  }
+  int ambient_dim() const { return inner_.ambient_dim(); }
+  void embed(const Point& q, Ambient& x) const { inner_.embed(q, x); }
+  void pullback(const Point& q, const Ambient& g, Point& out) const { inner_.pullback(q, g, out); }
+  Scalar distance(const Ambient& x, const Ambient& y) const { return inner_.distance(x, y); }
+  void distance_gradient(const Ambient& x, const Ambient& y, Ambient& g) const {
+    inner_.distance_gradient(x, y, g);
+  }
+  Scalar curvature() const { return inner_.curvature(); }
+  // For the tests' scene helpers only (radius and trap centre); not used by the engine.
+  Scalar radius() const { return inner_.radius(); }
+
+ private:
+  Inner inner_;
+};
+
+template <class Inner, class Stepper, class FastStepper>
+void check_generic(long steps) {
+  using Scalar = typename Inner::Scalar;
+  using Chart = Forwarding<Inner>;
+  static_assert(sesi::HierarchicalChart<Chart> && sesi::EmbeddedChart<Chart> &&
+                sesi::MetricSpace<Chart>);
+  static_assert(!sesi::HasLevelFlow<Chart> && !sesi::HasTrigCache<Chart>);
+  static_assert(sesi::HasTrigCache<Inner>);
+
+  const auto fast = make_scene<Inner>();
+  const Chart chart(fast.chart());
+  const Scene<Chart> generic(chart, fast.masses(),
+                             Trap<Chart>{std::get<0>(fast.terms()).k, std::get<0>(fast.terms()).c},
+                             std::get<1>(fast.terms()));
+  const auto x0 = initial_state(fast, 13);
+  sesi::State<Chart> y0(fast.dim(), fast.bodies());
+  y0.q = x0.q;
+  y0.p = x0.p;
+
+  const Scalar tau = Scalar(0.05);
+  const auto x = run<FastStepper>(fast, x0, tau * Scalar(steps), steps);
+  const auto y = run<Stepper>(generic, y0, tau * Scalar(steps), steps);
+  const Scalar n = Scalar(fast.dim());
+  const Scalar bound = Scalar(2 * steps * Stepper::table::stages) * (Scalar(2) * n + 1) *
+                       (n + 4) * eps<Scalar>() * std::max(size_of(x), size_of(x0));
+  const Scalar err = std::max((x.q - y.q).cwiseAbs().maxCoeff(), (x.p - y.p).cwiseAbs().maxCoeff());
+  MESSAGE(Stepper::table::name, " generic vs cached after ", steps, " steps: ", double(err), " (",
+          double(err / (eps<Scalar>() * size_of(x))), " eps), bound ", double(bound));
+  CHECK(err <= bound);
+}
+
+template <class Inner>
+void check_all(long steps) {
+  using Chart = Forwarding<Inner>;
+  check_generic<Inner, sesi::Strang<Chart>, sesi::Strang<Inner>>(steps);
+  check_generic<Inner, sesi::Composition<co::Yoshida4, Chart, sesi::Splitting::kick_drift_kick>,
+                sesi::Composition<co::Yoshida4, Inner, sesi::Splitting::kick_drift_kick>>(steps);
+}
+
+}  // namespace
+
+using CurvedCharts =
+    std::tuple<sesi::Sphere<1, double>, sesi::Sphere<2, double>, sesi::Sphere<3, double>,
+               sesi::Sphere<4, double>, sesi::Sphere<5, double>, sesi::Sphere<6, double>,
+               sesi::Hyperbolic<1, double>, sesi::Hyperbolic<2, double>,
+               sesi::Hyperbolic<3, double>, sesi::Hyperbolic<4, double>,
+               sesi::Hyperbolic<5, double>, sesi::Hyperbolic<6, double>>;
+
+TEST_CASE_TEMPLATE_DEFINE("generic: a forwarding chart equals the cached built-in path", Inner,
+                          generic_spaces) {
+  check_all<Inner>(1);
+  check_all<Inner>(10);
+}
+TEST_CASE_TEMPLATE_APPLY(generic_spaces, CurvedCharts);
+
+TEST_CASE("generic: a forwarding chart equals the cached path in float and long double") {
+  check_all<sesi::Sphere<3, float>>(10);
+  check_all<sesi::Hyperbolic<3, long double>>(10);
+}
