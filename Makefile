@@ -4,10 +4,11 @@
 BUILD_DIR   ?= build
 RELEASE_DIR ?= build-release
 JOBS        ?= $(shell nproc)
+# clang and its runtimes (libclang-rt) build the sanitizer job of `make test` and `make fuzz`.
 APT_PACKAGES := cmake g++ make libeigen3-dev libboost-dev doctest-dev libtomlplusplus-dev \
-                libcli11-dev python3-matplotlib
+                libcli11-dev python3-matplotlib clang libclang-rt-14-dev
 
-.PHONY: deps configure build test demo clean
+.PHONY: deps configure build test demo clean fuzz figures
 
 deps:
 	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
@@ -34,3 +35,33 @@ demo: deps
 
 clean:
 	rm -rf $(BUILD_DIR) $(RELEASE_DIR)
+
+# libFuzzer on the scene reader (fuzz/): a clang build in build-fuzz, run for FUZZ_SECONDS with the
+# example and bad scenes as seeds; the corpus grows in fuzz-out/corpus, crashes go to fuzz-out/.
+FUZZ_DIR     ?= build-fuzz
+FUZZ_SECONDS ?= 600
+fuzz: deps
+	cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
+	  -DSESI_BUILD_FUZZ=ON -DSESI_BUILD_TESTS=OFF -DSESI_BUILD_EXAMPLES=OFF -DSESI_INSTALL=OFF
+	cmake --build $(FUZZ_DIR) -j $(JOBS) --target sesi_scene_fuzzer
+	mkdir -p fuzz-out/corpus fuzz-out/artifacts
+	$(FUZZ_DIR)/fuzz/sesi_scene_fuzzer fuzz-out/corpus examples/scenes tests/program/bad \
+	  -dict=fuzz/scene.dict -max_total_time=$(FUZZ_SECONDS) -artifact_prefix=fuzz-out/artifacts/ \
+	  -print_final_stats=1
+
+# The benchmark figures and tables of docs/benchmarks.md (issue #4): `sesi bench` on the built-in
+# scenes in a Release build, the seed's two figures, then the plots (Debian's matplotlib).
+BENCH_DIR ?= build-bench
+BENCH_OUT ?= sesi-out/bench
+PYTHON3   := $$(test -x /usr/bin/python3 && echo /usr/bin/python3 || echo python3)
+figures: deps
+	cmake -S . -B $(BENCH_DIR) -DCMAKE_BUILD_TYPE=Release -DSESI_BUILD_TESTS=OFF
+	cmake --build $(BENCH_DIR) -j $(JOBS) --target sesi_program
+	for s in paper kepler-s2 kepler-h2; do $(BENCH_DIR)/src/sesi bench --scene $$s --out $(BENCH_OUT)/$$s || exit 1; done
+	$(BENCH_DIR)/src/sesi bench --figure seed-fig1 --repeats 5 --out $(BENCH_OUT)/figures
+	$(BENCH_DIR)/src/sesi bench --figure convergence --out $(BENCH_OUT)/figures
+	mkdir -p docs/figures
+	$(PYTHON3) tools/figures.py seed-fig1 $(BENCH_OUT)/figures docs/figures/seed-fig1.png
+	$(PYTHON3) tools/figures.py convergence $(BENCH_OUT)/figures docs/figures/convergence.png
+	$(PYTHON3) tools/plot_bench.py $(BENCH_OUT)/paper $(BENCH_OUT)/kepler-s2 $(BENCH_OUT)/kepler-h2 \
+	  --figures docs/figures --markdown | tee $(BENCH_OUT)/report.txt

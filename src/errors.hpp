@@ -2,7 +2,8 @@
 /// @file errors.hpp
 /// How the program fails. Every failure ends in one line on stderr and an exit status:
 ///   2  bad input (a scene file, an argument, the output directory): nothing is written;
-///   3  a run whose state became non-finite: the outputs so far are kept, marked incomplete;
+///   3  a run that went wrong (non-finite state, energy guard, close encounter): the outputs so
+///      far are kept, marked incomplete;
 ///   130 interrupted (SIGINT/SIGTERM): as 3, with the reason "interrupted".
 
 #include <stdexcept>

@@ -1,10 +1,11 @@
-// sesi: the command-line program (docs/program.md). Arguments here; `run` in run_command.cpp.
+// sesi: the command-line program (docs/scene-format.md). Arguments here; `run` in run_command.cpp.
 #include <cstdio>
 #include <exception>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "bench_command.hpp"
 #include "errors.hpp"
 #include "methods.hpp"
 #include "run_command.hpp"
@@ -28,8 +29,8 @@ std::string run_footer() {
       "                 with v (tangent velocity)\n"
       "  [[potential]]  kind = \"chord-well\" (theta0, strength), \"cotangent-gravity\" (G),\n"
       "                 \"central-cotangent\" (k, center), \"harmonic-pair\" (k, d0),\n"
-      "                 \"lennard-jones\" (epsilon, sigma, cutoff)\n"
-      "  [integrator]   method, dt, t_end, output_every\n"
+      "                 \"lennard-jones\" (epsilon, sigma, cutoff); singular terms also min_distance\n"
+      "  [integrator]   method, dt, t_end, output_every, energy_guard\n"
       "  Without SCENE: the seed paper's three bodies on S^2 with sesi4, dt = 0.1, t_end = 800.\n"
       "\nOUTPUTS (in DIR, replaced as a whole when the run ends):\n"
       "  trajectory.csv   t, then per body b: b<b>_q<i>, b<b>_p<i>, b<b>_x<i>\n"
@@ -38,7 +39,10 @@ std::string run_footer() {
       "  summary.json     settings, energy and momentum-map errors, final state, wall time\n"
       "\nEXIT STATUS:\n"
       "  0 done;  2 bad scene or argument (one line on stderr, nothing written);\n"
-      "  3 the state became non-finite (outputs so far kept, \"complete\": false);\n"
+      "  3 the run went wrong: the state became non-finite, the energy error passed the guard\n"
+      "    ([integrator] energy_guard) or two bodies came below the close-encounter floor\n"
+      "    (min_distance); one line names the step, time and bodies; outputs so far kept,\n"
+      "    \"complete\": false in summary.json;\n"
       "  130 interrupted (likewise);  1 other failure (e.g. a write error).\n"
       "\nA progress bar appears on stderr for runs longer than a second when stderr is a terminal.\n";
   return text;
@@ -78,6 +82,8 @@ int main(int argc, char** argv) {
       run->add_option("--output-every", output_every, "Steps between output rows, >= 1.")->type_name("N");
   run->add_flag("--quiet,-q", options.quiet, "No report on stdout and no progress bar.");
   run->footer(run_footer());
+  BenchOptions bench_options;
+  CLI::App* bench = add_bench_subcommand(app, bench_options);
 
   try {
     app.parse(argc, argv);
@@ -92,6 +98,7 @@ int main(int argc, char** argv) {
   if (every_opt->count() > 0) options.output_every = output_every;
 
   try {
+    if (bench->parsed()) return bench_command(bench_options);
     return run_command(options);
   } catch (const InputError& e) {
     print_error(e.what());

@@ -135,6 +135,8 @@ int run_command(const RunOptions& options) {
       return exit_interrupted;
     case StopReason::non_finite:
     case StopReason::invariant_failed:
+    case StopReason::energy_guard:
+    case StopReason::close_encounter:
       break;
   }
   print_error(scene.name + ": " + outcome.detail + " at step " + std::to_string(outcome.failed_step) +

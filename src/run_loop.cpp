@@ -2,8 +2,12 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
+
+#include <sesi/guard.hpp>
 
 #include "errors.hpp"
+#include "geometry.hpp"
 #include "progress.hpp"
 #include "validate.hpp"
 
@@ -17,6 +21,76 @@ int first_non_finite_body(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p) {
     if (!q.col(b).allFinite() || !p.col(b).allFinite()) return static_cast<int>(b) + 1;
   }
   return 0;
+}
+
+/// The singular potentials' close-encounter floors (docs/stability.md), checked after every
+/// step on the embedding points; nothing to do for scenes without a singular potential.
+class EncounterCheck {
+ public:
+  EncounterCheck(const Scene& scene, const Geometry& geometry) : scene_(scene), geometry_(geometry) {
+    for (std::size_t k = 0; k < scene.potentials.size(); ++k) {
+      const double floor = encounter_floor(scene.potentials[k], geometry.length_scale());
+      if (floor > 0.0) terms_.push_back({k, floor});
+    }
+  }
+  bool active() const { return !terms_.empty(); }
+
+  /// The encounter deepest below its floor among the points x (ambient x bodies), as the detail
+  /// of the run's failure, or "" when none.
+  std::string check(const Eigen::MatrixXd& x) const {
+    double worst = 1.0;
+    std::string detail;
+    const auto consider = [&](const Term& t, double d, int i, int j) {
+      const PotentialSpec& spec = scene_.potentials[t.index];
+      const double gap = singular_gap(spec, scene_.space.kind, scene_.space.radius, d);
+      if (!(gap / t.floor < worst)) return;  // NaN distances are the non-finite check's
+      worst = gap / t.floor;
+      const std::string where = j > 0 ? "bodies " + std::to_string(i) + " and " + std::to_string(j)
+                                      : "body " + std::to_string(i) + " and the center";
+      detail = "close encounter: " + where + " came within " + format_short(gap) +
+               (gap < d ? " of antipodal" : "") + ", below the close-encounter floor " +
+               format_short(t.floor) + " of the " + std::string(potential_kind(spec)) +
+               " potential (potential[" + std::to_string(t.index + 1) + "], min_distance)";
+    };
+    Eigen::VectorXd a, b;
+    for (const Term& t : terms_) {
+      const PotentialSpec& spec = scene_.potentials[t.index];
+      if (const auto* central = std::get_if<CentralCotangentSpec>(&spec)) {
+        for (Eigen::Index i = 0; i < x.cols(); ++i) {
+          a = x.col(i);
+          consider(t, geometry_.distance(a, central->center), static_cast<int>(i) + 1, 0);
+        }
+        continue;
+      }
+      for (Eigen::Index j = 1; j < x.cols(); ++j) {
+        b = x.col(j);
+        for (Eigen::Index i = 0; i < j; ++i) {
+          a = x.col(i);
+          consider(t, geometry_.distance(a, b), static_cast<int>(i) + 1, static_cast<int>(j) + 1);
+        }
+      }
+    }
+    return detail;
+  }
+
+ private:
+  struct Term {
+    std::size_t index;
+    double floor;
+  };
+  const Scene& scene_;
+  const Geometry& geometry_;
+  std::vector<Term> terms_;
+};
+
+/// The energy guard of the scene (sesi::EnergyGuard), on the scale K0 + |V0| of its initial state.
+sesi::EnergyGuard<double> energy_guard(const Scene& scene, const Geometry& geometry, const Snapshot& s) {
+  double kinetic = 0.0;
+  for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
+    kinetic += geometry.kinetic_energy(s.q.col(b), s.p.col(b), scene.bodies[static_cast<std::size_t>(b)].mass);
+  }
+  const double threshold = scene.integrator.energy_guard.value_or(sesi::EnergyGuard<double>::default_relative);
+  return sesi::EnergyGuard<double>(s.energy, kinetic + std::abs(s.energy - kinetic), threshold);
 }
 
 /// The step sizes: |dt| everywhere but the last step, which ends exactly at t_end.
@@ -57,6 +131,10 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Observables& obs
   recorder.track(s.energy, s.momentum);
   recorder.write_row(s);
 
+  const Geometry geometry(scene.space);
+  const sesi::EnergyGuard<double> guard = energy_guard(scene, geometry, s);
+  const EncounterCheck encounters(scene, geometry);
+
   RunOutcome outcome;
   Snapshot good = s;         // the last finite state
   bool good_written = true;  // ... and whether it is a row already
@@ -67,6 +145,7 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Observables& obs
       break;
     }
     int bad_body = 0;
+    bool points_fresh = false;  // s.x already holds this step's points
     try {
       integrator.step(schedule.time(k - 1), schedule.h(k));
       integrator.read(s.q, s.p);
@@ -88,6 +167,23 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Observables& obs
       outcome.reason = StopReason::non_finite;
       outcome.failed_body = bad_body;
       outcome.detail = "the state became non-finite";
+    } else if (outcome.reason == StopReason::completed) {
+      // The close-encounter floor, then the energy guard (an encounter also spoils the energy).
+      if (encounters.active()) {
+        s.x = observe.points();
+        points_fresh = true;
+        if (std::string detail = encounters.check(s.x); !detail.empty()) {
+          outcome.reason = StopReason::close_encounter;
+          outcome.detail = std::move(detail);
+        }
+      }
+      const auto verdict = guard.check(k, schedule.time(k), s.energy);
+      if (outcome.reason == StopReason::completed && verdict.status == sesi::GuardStatus::energy_error_exceeded) {
+        outcome.reason = StopReason::energy_guard;
+        outcome.detail = "energy error exceeded: |E - E0| = " + format_short(std::abs(s.energy - guard.initial_energy())) +
+                         ", " + format_short(verdict.error) + " times the initial energy scale " +
+                         format_short(guard.scale()) + " (energy_guard = " + format_short(guard.relative()) + ")";
+      }
     }
     if (outcome.reason != StopReason::completed) {
       outcome.failed_step = k;
@@ -100,7 +196,7 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Observables& obs
     outcome.steps_done = k;
     good_written = k % every == 0 || k == schedule.steps;
     if (good_written) {
-      s.x = observe.points();
+      if (!points_fresh) s.x = observe.points();
       recorder.write_row(s);
     }
     std::swap(good, s);

@@ -22,7 +22,7 @@ struct Snapshot {
   Eigen::VectorXd momentum;  ///< the momentum map (sesi::momentum_map)
 };
 
-enum class StopReason { completed, non_finite, invariant_failed, interrupted };
+enum class StopReason { completed, non_finite, invariant_failed, interrupted, energy_guard, close_encounter };
 
 /// How a run ended.
 struct RunOutcome {
@@ -41,7 +41,8 @@ struct RunControl {
   ProgressBar* progress = nullptr;
 };
 
-/// "completed", "non-finite state", "invariant failed", "interrupted".
+/// "completed", "non-finite state", "invariant failed", "interrupted", "energy error exceeded",
+/// "close encounter".
 const char* stop_reason_name(StopReason reason);
 
 }  // namespace sesi::program

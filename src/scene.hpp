@@ -35,12 +35,16 @@ struct ChordWellSpec {
   double theta0;
   double strength;
 };
+/// min_distance of the singular terms: the close-encounter floor (docs/stability.md); < 0 the
+/// library's default (length scale * eps^(1/3)), 0 no check.
 struct CotangentGravitySpec {
   double G;
+  double min_distance = -1.0;
 };
 struct CentralCotangentSpec {
   double k;
   Eigen::VectorXd center;  ///< an embedding point
+  double min_distance = -1.0;
 };
 struct HarmonicPairSpec {
   double k;
@@ -50,6 +54,7 @@ struct LennardJonesSpec {
   double epsilon;
   double sigma;
   double cutoff;
+  double min_distance = -1.0;
 };
 using PotentialSpec = std::variant<ChordWellSpec, CotangentGravitySpec, CentralCotangentSpec,
                                    HarmonicPairSpec, LennardJonesSpec>;
@@ -62,6 +67,9 @@ struct IntegratorSpec {
   std::optional<double> dt;     ///< required by the time the run starts (file or --dt)
   std::optional<double> t_end;  ///< required by the time the run starts (file or --t-end)
   long output_every = 1;
+  /// Threshold of the energy guard on |E - E0| / (K0 + |V0|) (sesi::EnergyGuard); empty: the
+  /// library's default; 0: off (`energy_guard = false`).
+  std::optional<double> energy_guard;
   int line = 0;  ///< line of [integrator] in the scene file (0: none), for messages
 };
 

@@ -38,6 +38,116 @@ constexpr std::array potential_kinds = {"chord-well"sv, "cotangent-gravity"sv,
                                         "lennard-jones"sv};
 constexpr std::array exact_solutions = {"paper"sv};
 
+// ---- a shield against a toml++ 3.3 bug ---------------------------------------------------------
+// toml++ 3.3's is_non_ascii_horizontal_whitespace() reaches __builtin_unreachable (undefined
+// behaviour) for the code points U+00A1..U+0499, U+2C5E..U+3057 and U+FB26..U+FEFF (but U+3000,
+// U+FEFF) wherever it tests them for whitespace: in keys, malformed values, or after a string it
+// could not parse (found by fuzz/scene_fuzzer.cpp). Before parsing, every code point of those
+// three ranges is replaced by one of the unused private-use code points U+F0000..U+F0BFF (beyond
+// U+FEFF the test returns false at once), and the strings read from the table are mapped back,
+// so valid files read exactly as before. Files that use that private-use block are refused.
+
+constexpr char32_t shield_base = 0xF0000;
+struct ShieldRange {
+  char32_t first, last;
+};
+constexpr std::array<ShieldRange, 3> shielded_ranges = {{{0xA0, 0x499}, {0x2C5E, 0x3057}, {0xFB26, 0xFEFF}}};
+constexpr char32_t shield_end = shield_base + 0xC00;
+
+/// The code point at text[k] and its length in bytes, or length 0 for ill-formed UTF-8 (left
+/// to toml++, which reports it).
+std::pair<char32_t, std::size_t> decode_utf8(std::string_view text, std::size_t k) {
+  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
+  const unsigned char c = byte(k);
+  std::size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+  if (n == 0 || k + n > text.size()) return {0, 0};
+  char32_t cp = n == 1 ? c : n == 2 ? (c & 0x1F) : n == 3 ? (c & 0x0F) : (c & 0x07);
+  for (std::size_t i = 1; i < n; ++i) {
+    if ((byte(k + i) & 0xC0) != 0x80) return {0, 0};
+    cp = (cp << 6) | (byte(k + i) & 0x3F);
+  }
+  return {cp, n};
+}
+
+void encode_utf8(char32_t cp, std::string& out) {
+  if (cp < 0x80) {
+    out += static_cast<char>(cp);
+  } else if (cp < 0x800) {
+    out += static_cast<char>(0xC0 | (cp >> 6));
+    out += static_cast<char>(0x80 | (cp & 0x3F));
+  } else if (cp < 0x10000) {
+    out += static_cast<char>(0xE0 | (cp >> 12));
+    out += static_cast<char>(0x80 | ((cp >> 6) & 0x3F));
+    out += static_cast<char>(0x80 | (cp & 0x3F));
+  } else {
+    out += static_cast<char>(0xF0 | (cp >> 18));
+    out += static_cast<char>(0x80 | ((cp >> 12) & 0x3F));
+    out += static_cast<char>(0x80 | ((cp >> 6) & 0x3F));
+    out += static_cast<char>(0x80 | (cp & 0x3F));
+  }
+}
+
+/// text with the shielded code points replaced (into out); the line and column of a code point
+/// of the private-use block, if the text has one. A leading byte-order mark is kept.
+std::optional<std::pair<int, int>> shield_from_toml_bug(std::string_view text, std::string& out) {
+  out.clear();
+  out.reserve(text.size() + text.size() / 2);
+  int line = 1, column = 0;
+  std::size_t k = 0;
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") {
+    out.append(text.substr(0, 3));
+    k = 3;
+  }
+  while (k < text.size()) {
+    const auto [cp, n] = decode_utf8(text, k);
+    ++column;
+    if (n == 0) {  // ill-formed: copied as is
+      out += text[k++];
+      continue;
+    }
+    if (cp == U'\n') {
+      ++line;
+      column = 0;
+    }
+    if (cp >= shield_base && cp < shield_end) return std::pair{line, column};
+    char32_t mapped = cp;
+    char32_t offset = 0;
+    for (const ShieldRange& r : shielded_ranges) {
+      if (cp >= r.first && cp <= r.last) mapped = shield_base + offset + (cp - r.first);
+      offset += 0x400;
+    }
+    if (mapped == cp) {
+      out.append(text.substr(k, n));
+    } else {
+      encode_utf8(mapped, out);
+    }
+    k += n;
+  }
+  return std::nullopt;
+}
+
+/// The inverse of shield_from_toml_bug on a string read from the table.
+std::string unshield(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  std::size_t k = 0;
+  while (k < text.size()) {
+    const auto [cp, n] = decode_utf8(text, k);
+    if (n == 0) {
+      out += text[k++];
+      continue;
+    }
+    if (cp >= shield_base && cp < shield_end) {
+      const char32_t offset = cp - shield_base;
+      encode_utf8(shielded_ranges[offset / 0x400].first + offset % 0x400, out);
+    } else {
+      out.append(text.substr(k, n));
+    }
+    k += n;
+  }
+  return out;
+}
+
 std::string_view type_name(const toml::node& node) {
   switch (node.type()) {
     case toml::node_type::table: return "a table";
@@ -78,8 +188,9 @@ class TableReader {
   void allow_only(std::span<const std::string_view> allowed, std::string_view what) const {
     for (auto&& [key, node] : table_) {
       if (std::find(allowed.begin(), allowed.end(), key.str()) != allowed.end()) continue;
-      const std::string hint = did_you_mean(key.str(), allowed);
-      throw InputError(origin_of(key.source()), key_path(key.str()),
+      const std::string name = unshield(key.str());
+      const std::string hint = did_you_mean(name, allowed);
+      throw InputError(origin_of(key.source()), key_path(name),
                        "unknown key in " + std::string(what) +
                            (hint.empty() ? " (expected " + one_of(allowed) + ")" : hint));
     }
@@ -137,7 +248,7 @@ class TableReader {
       throw InputError(origin_of(node->source()), key_path(key),
                        "expected " + std::string(expected) + ", got " + std::string(type_name(*node)));
     }
-    return s->get();
+    return unshield(s->get());
   }
 
   /// An array of `size` finite numbers.
@@ -377,7 +488,7 @@ class SceneReader {
     if (!term.has("kind")) {
       static constexpr std::array any_keys = {"kind"sv,    "theta0"sv,  "strength"sv, "G"sv,
                                               "k"sv,       "center"sv,  "d0"sv,       "epsilon"sv,
-                                              "sigma"sv,   "cutoff"sv};
+                                              "sigma"sv,   "cutoff"sv,  "min_distance"sv};
       term.allow_only(any_keys, "[[potential]]");
       term.missing("kind", "one of " + one_of(potential_kinds));
     }
@@ -393,15 +504,16 @@ class SceneReader {
       return spec;
     }
     if (kind == "cotangent-gravity") {
-      static constexpr std::array keys = {"kind"sv, "G"sv};
+      static constexpr std::array keys = {"kind"sv, "G"sv, "min_distance"sv};
       term.allow_only(keys, "a cotangent-gravity potential");
-      return CotangentGravitySpec{term.number_or("G", 1.0, "a finite number")};
+      return CotangentGravitySpec{term.number_or("G", 1.0, "a finite number"), min_distance(term)};
     }
     if (kind == "central-cotangent") {
-      static constexpr std::array keys = {"kind"sv, "k"sv, "center"sv};
+      static constexpr std::array keys = {"kind"sv, "k"sv, "center"sv, "min_distance"sv};
       term.allow_only(keys, "a central-cotangent potential");
       CentralCotangentSpec spec{term.number_or("k", 1.0, "a finite number"),
-                                term.vector("center", geometry_->ambient_dim(), "a point of the space")};
+                                term.vector("center", geometry_->ambient_dim(), "a point of the space"),
+                                min_distance(term)};
       const double off = geometry_->constraint_residual(spec.center);
       if (off > on_space_tolerance || !geometry_->on_upper_sheet(spec.center)) {
         term.fail("center", "not on the " + space_noun() + ": relative residual " + format_short(off) +
@@ -418,10 +530,10 @@ class SceneReader {
       return spec;
     }
     if (kind == "lennard-jones") {
-      static constexpr std::array keys = {"kind"sv, "epsilon"sv, "sigma"sv, "cutoff"sv};
+      static constexpr std::array keys = {"kind"sv, "epsilon"sv, "sigma"sv, "cutoff"sv, "min_distance"sv};
       term.allow_only(keys, "a lennard-jones potential");
       LennardJonesSpec spec{term.number_or("epsilon", 1.0, "a finite number >= 0"),
-                            term.number_or("sigma", 1.0, "a finite number > 0"), 0.0};
+                            term.number_or("sigma", 1.0, "a finite number > 0"), 0.0, min_distance(term)};
       spec.cutoff = term.number_or("cutoff", 2.5 * spec.sigma, "a finite distance > 0");
       if (spec.epsilon < 0.0) term.fail("epsilon", "expected a finite number >= 0, got " + format_number(spec.epsilon));
       if (!(spec.sigma > 0.0)) term.fail("sigma", "expected a finite number > 0, got " + format_number(spec.sigma));
@@ -432,12 +544,20 @@ class SceneReader {
                           " (expected " + one_of(potential_kinds) + ")");
   }
 
+  /// A singular term's close-encounter floor: min_distance, or -1 for the library's default.
+  static double min_distance(const TableReader& term) {
+    if (!term.has("min_distance")) return -1.0;
+    const double d = term.number("min_distance", "a finite distance >= 0");
+    check_min_distance(d, term.origin_of("min_distance"), term.key_path("min_distance"));
+    return d;
+  }
+
   void read_integrator() {
     const toml::table* table = root_.table("integrator");
     if (!table) return;  // every setting may come from the command line
     const TableReader in(*table, "integrator", file_);
     scene_.integrator.line = in.origin().line;
-    static constexpr std::array keys = {"method"sv, "dt"sv, "t_end"sv, "output_every"sv};
+    static constexpr std::array keys = {"method"sv, "dt"sv, "t_end"sv, "output_every"sv, "energy_guard"sv};
     in.allow_only(keys, "[integrator]");
     IntegratorSpec& spec = scene_.integrator;
     if (in.has("method")) {
@@ -455,6 +575,19 @@ class SceneReader {
     if (in.has("output_every")) {
       spec.output_every = in.integer("output_every", "an integer >= 1");
       check_output_every(spec.output_every, in.origin_of("output_every"), in.key_path("output_every"));
+    }
+    if (in.has("energy_guard")) {
+      // false turns the guard off; a number is the threshold on the relative energy error.
+      const toml::node* node = in.get("energy_guard");
+      if (const auto* flag = node->as_boolean(); flag && !flag->get()) {
+        spec.energy_guard = 0.0;
+      } else if (flag) {
+        in.fail("energy_guard", "expected a finite threshold > 0 or false, got true (the guard is on by "
+                                "default; give a threshold to change it)");
+      } else {
+        spec.energy_guard = in.number("energy_guard", "a finite threshold > 0 or false");
+        check_energy_guard(*spec.energy_guard, in.origin_of("energy_guard"), in.key_path("energy_guard"));
+      }
     }
     if (spec.dt && spec.t_end) check_step_count(*spec.t_end, *spec.dt, in.origin(), in.path());
   }
@@ -479,6 +612,7 @@ class SceneReader {
           if (sphere && d >= antipodal * (1 - same_point_tolerance)) {
             body_error(i, "antipodal to the center of the " + term + ", where it is singular");
           }
+          check_floor(spec, i, d, "the center", term);
         }
         continue;
       }
@@ -496,6 +630,7 @@ class SceneReader {
             body_error(j, "antipodal to bodies[" + std::to_string(i + 1) + "], where the " + term +
                               " is singular");
           }
+          check_floor(spec, j, d, "bodies[" + std::to_string(i + 1) + "]", term);
           if (std::holds_alternative<ChordWellSpec>(spec)) {
             // s = chord / (sqrt(3) R) must stay below 1 (the well's square root).
             const double kappa = sphere ? 1 / (scale * scale) : scene_.space.kind == SpaceKind::hyperbolic ? -1 / (scale * scale) : 0.0;
@@ -509,6 +644,19 @@ class SceneReader {
           }
         }
       }
+    }
+  }
+
+  /// A body starting below a singular term's close-encounter floor would stop the run at its
+  /// first step (exit 3); it is bad input instead.
+  void check_floor(const PotentialSpec& spec, int b, double d, const std::string& other,
+                   const std::string& term) const {
+    const double floor = encounter_floor(spec, geometry_->length_scale());
+    const double gap = singular_gap(spec, scene_.space.kind, scene_.space.radius, d);
+    if (floor > 0.0 && gap < floor) {
+      body_error(b, "within " + format_short(gap) + " of " + other + (gap < d ? "'s antipode" : "") +
+                        ", below the close-encounter floor " + format_short(floor) + " of the " + term +
+                        " (min_distance; docs/stability.md)");
     }
   }
 
@@ -542,13 +690,18 @@ class SceneReader {
 }  // namespace
 
 Scene read_scene_text(std::string_view text, const std::string& path) {
+  std::string shielded;
+  if (const auto where = shield_from_toml_bug(text, shielded)) {
+    throw InputError(Origin{path, where->first, where->second}, "",
+                     "private-use characters U+F0000 to U+F0BFF are not allowed in a scene file");
+  }
   toml::table root;
   try {
-    root = toml::parse(text, path);
+    root = toml::parse(shielded, path);
   } catch (const toml::parse_error& e) {
     const auto& where = e.source().begin;
     throw InputError(Origin{path, static_cast<int>(where.line), static_cast<int>(where.column)}, "",
-                     "TOML syntax error: " + std::string(e.description()));
+                     "TOML syntax error: " + unshield(e.description()));
   }
   return SceneReader(root, path).read();
 }

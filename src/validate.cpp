@@ -1,6 +1,10 @@
 #include "validate.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
+
+#include <sesi/potentials.hpp>
 
 #include "methods.hpp"
 #include "suggest.hpp"
@@ -41,6 +45,39 @@ void check_step_count(double t_end, double dt, const Origin& origin, std::string
                      "t_end / |dt| = " + format_number(t_end / std::abs(dt)) +
                          " steps; at most " + format_number(max_steps) + " are allowed");
   }
+}
+
+void check_energy_guard(double threshold, const Origin& origin, std::string_view key) {
+  if (!std::isfinite(threshold) || !(threshold > 0.0)) {
+    throw InputError(origin, key,
+                     "expected a finite threshold > 0 on the relative energy error (or false to turn "
+                     "the guard off), got " + format_number(threshold));
+  }
+}
+
+void check_min_distance(double distance, const Origin& origin, std::string_view key) {
+  if (!std::isfinite(distance) || distance < 0.0) {
+    throw InputError(origin, key,
+                     "expected a finite distance >= 0 (0 turns the close-encounter check off), got " +
+                         format_number(distance));
+  }
+}
+
+double encounter_floor(const PotentialSpec& spec, double length) {
+  const auto floor_of = [](double min_distance, double scale) {
+    return min_distance < 0.0 ? sesi::default_min_distance(scale) : min_distance;
+  };
+  if (const auto* g = std::get_if<CotangentGravitySpec>(&spec)) return floor_of(g->min_distance, length);
+  if (const auto* c = std::get_if<CentralCotangentSpec>(&spec)) return floor_of(c->min_distance, length);
+  if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) return floor_of(lj->min_distance, lj->sigma);
+  return 0.0;
+}
+
+double singular_gap(const PotentialSpec& spec, SpaceKind kind, double radius, double d) {
+  const bool cotangent = std::holds_alternative<CotangentGravitySpec>(spec) ||
+                         std::holds_alternative<CentralCotangentSpec>(spec);
+  if (cotangent && kind == SpaceKind::sphere) return std::min(d, std::numbers::pi * radius - d);
+  return d;
 }
 
 long step_count(double t_end, double dt) {

@@ -24,6 +24,20 @@ void check_output_every(long output_every, const Origin& origin, std::string_vie
 /// t_end / |dt| within max_steps (both already checked on their own).
 void check_step_count(double t_end, double dt, const Origin& origin, std::string_view key);
 
+/// energy_guard: a finite threshold > 0 (relative energy error, sesi::EnergyGuard).
+void check_energy_guard(double threshold, const Origin& origin, std::string_view key);
+/// min_distance of a singular potential: a finite distance >= 0 (0 turns the check off).
+void check_min_distance(double distance, const Origin& origin, std::string_view key);
+
+/// The close-encounter floor of a potential on a space of length scale `length` (R, or 1 on
+/// E^n): its min_distance, or the library's default for the term (sesi::default_min_distance
+/// of R, or of sigma for Lennard-Jones) when min_distance < 0; 0 for terms that are not singular
+/// or whose check is off.
+double encounter_floor(const PotentialSpec& spec, double length);
+/// Distance from a geodesic distance d (between two bodies, or a body and a center) to the
+/// potential's singular set: d, or on the sphere for the cotangent terms min(d, pi R - d).
+double singular_gap(const PotentialSpec& spec, SpaceKind kind, double radius, double d);
+
 /// The number of steps of a run: ceil(t_end / |dt|) up to round-off (the last step is
 /// shortened to end exactly at t_end).
 long step_count(double t_end, double dt);

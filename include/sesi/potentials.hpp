@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <concepts>
+#include <limits>
 #include <numbers>
 #include <utility>
 
@@ -52,7 +53,28 @@ typename Space::Scalar radius_or_one(const Space& s) {
     return typename Space::Scalar(1);
   }
 }
+/// Distance from d to the singular set of a ctn-based term: d itself, and on S^n also the
+/// antipode (ctn = cot(d/R)/R is singular at d = pi R).
+template <class Space, class Scalar>
+Scalar ctn_singular_gap(const Space& space, Scalar d) {
+  if constexpr (requires { space.curvature(); }) {
+    if (space.curvature() > Scalar(0)) {
+      using std::min;
+      return min(d, std::numbers::pi_v<Scalar> * radius_or_one(space) - d);
+    }
+  }
+  return d;
+}
 }  // namespace detail
+
+/// The default close-encounter floor of a singular term of length scale L: L eps^(1/3)
+/// (6.1e-6 L in double; docs/stability.md). Closer than that, the round-off of the points
+/// (eps L) already moves a 1/d potential by eps^(1/3) of its scale 1/L.
+template <class Scalar>
+Scalar default_min_distance(Scalar length) {
+  using std::cbrt;
+  return length * cbrt(std::numeric_limits<Scalar>::epsilon());
+}
 
 /// The seed paper's pair term (eq. 11 and Suppl. "Finding an explicit solution"):
 /// W(s) = ((sqrt(1 - s^2) - cos theta0) / s)^2 with s = chord / (sqrt(3) R) = 2 sin(L/2R)/sqrt(3),
@@ -103,6 +125,17 @@ template <class Scalar>
 struct CotangentGravity {
   using distance_kind = geodesic_distance;
   Scalar G = Scalar(1);
+  /// Close-encounter floor (sesi::closest_encounter): < 0 the default, R eps^(1/3); 0 none.
+  Scalar min_distance = Scalar(-1);
+
+  template <class Space>
+  Scalar encounter_floor(const Space& space) const {
+    return min_distance < Scalar(0) ? default_min_distance(detail::radius_or_one(space)) : min_distance;
+  }
+  template <class Space>
+  Scalar singular_gap(const Space& space, Scalar d) const {
+    return detail::ctn_singular_gap(space, d);
+  }
 
   template <class Space>
   Scalar value(const Space& space, Scalar d, Scalar mi, Scalar mj) const {
@@ -139,6 +172,17 @@ struct LennardJones {
   Scalar epsilon = Scalar(1);
   Scalar sigma = Scalar(1);
   Scalar cutoff = Scalar(2.5);
+  /// Close-encounter floor (sesi::closest_encounter): < 0 the default, sigma eps^(1/3); 0 none.
+  Scalar min_distance = Scalar(-1);
+
+  template <class Space>
+  Scalar encounter_floor(const Space&) const {
+    return min_distance < Scalar(0) ? default_min_distance(sigma) : min_distance;
+  }
+  template <class Space>
+  Scalar singular_gap(const Space&, Scalar d) const {
+    return d;
+  }
 
   Scalar raw(Scalar d) const {
     const Scalar s2 = sigma * sigma / (d * d);
@@ -164,6 +208,16 @@ struct CentralCotangent {
   using Scalar = typename Space::Scalar;
   Scalar k = Scalar(1);
   typename Space::Ambient center;
+  /// Close-encounter floor (sesi::closest_encounter): < 0 the default, R eps^(1/3); 0 none.
+  Scalar min_distance = Scalar(-1);
+
+  Scalar encounter_floor(const Space& space) const {
+    return min_distance < Scalar(0) ? default_min_distance(detail::radius_or_one(space)) : min_distance;
+  }
+  /// Distance from x to the term's singular set (the center, and its antipode on S^n).
+  Scalar singular_gap(const Space& space, const typename Space::Ambient& x) const {
+    return detail::ctn_singular_gap(space, space.distance(x, center));
+  }
 
   Scalar value(const Space& space, const typename Space::Ambient& x, Scalar m) const {
     return -k * m * special::ctn(space.curvature(), space.distance(x, center));

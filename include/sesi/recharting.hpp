@@ -86,10 +86,12 @@ int rechart(const Sys& sys, State<typename Sys::Chart>& s,
 /// The same state in the identity frames (the space's own chart): q, p of each body recomputed
 /// from its world point and velocity (the cotangent lift again, so the map is canonical), frames
 /// dropped. For output in the scene's chart; a body on the chart's singular set gets the chart's
-/// conventional angles there (EmbeddedChart::chart).
+/// conventional angles there (EmbeddedChart::chart), and a re-charted body's angles are in the
+/// chart's principal range (its winding is not recorded).
 template <class Sys>
 State<typename Sys::Chart> in_world_chart(const Sys& sys, const State<typename Sys::Chart>& s) {
   using Chart = typename Sys::Chart;
+  using Scalar = typename Sys::Scalar;
   State<Chart> out(s.q.rows(), s.bodies());
   out.q = s.q;
   out.p = s.p;
@@ -100,6 +102,8 @@ State<typename Sys::Chart> in_world_chart(const Sys& sys, const State<typename S
     typename Chart::Ambient x(chart.ambient_dim()), v(chart.ambient_dim());
     for (int b = 0; b < s.bodies(); ++b) {
       const auto& frame = s.frames[static_cast<std::size_t>(b)];
+      // A body never re-charted keeps its coordinates as they are (angles unwrapped).
+      if (frame.isIdentity(Scalar(0))) continue;
       q = s.q.col(b);
       p = s.p.col(b);
       chart.embed(q, x);

@@ -6,6 +6,7 @@
 #include "sesi/coefficients.hpp"
 #include "sesi/config.hpp"
 #include "sesi/diagnostics.hpp"
+#include "sesi/guard.hpp"
 #include "sesi/potentials.hpp"
 #include "sesi/spaces/euclidean.hpp"
 #include "sesi/spaces/hyperbolic.hpp"

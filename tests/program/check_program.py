@@ -269,7 +269,14 @@ def out_holds_other_files(ctx):
 @case
 def out_unwritable(ctx):
     if os.geteuid() == 0:
-        raise Skip("root ignores directory permissions")
+        # Root ignores directory permissions, but not sysfs's: nothing may be created there.
+        out = pathlib.Path("/sys/sesi-out-test")
+        if not pathlib.Path("/sys").is_dir() or out.exists():
+            raise Skip("no sysfs to stand for an unwritable directory")
+        result = ctx.run("run", "--t-end", "1", "--out", out)
+        expect_input_error(result, key=f"--out {out}", text="cannot write")
+        check(not out.exists(), f"{out} was created")
+        return
     parent = ctx.work / "locked"
     parent.mkdir()
     out = parent / "out"
@@ -366,6 +373,20 @@ def default_equals_paper_file(ctx):
     for name in ["trajectory.csv", "diagnostics.csv", "exact.csv"]:
         check((ctx.work / "a" / name).read_bytes() == (ctx.work / "b" / name).read_bytes(),
               f"{name}: the embedded scene and examples/scenes/paper.toml differ")
+
+
+@case
+def reproducible(ctx):
+    # -ffp-contract=off and no -ffast-math: the same scene gives bit-identical numbers on one machine.
+    for scene in ["paper.toml", "sphere-pole-crossing.toml", "hyperbolic-kepler-xv.toml"]:
+        runs = []
+        for k in range(2):
+            out = ctx.work / f"repro-{scene}-{k}"
+            expect_ok(ctx.run("run", ctx.scene(scene), "--t-end", "20", "--quiet", "--out", out), scene)
+            data = summary(out)
+            data.pop("wall_seconds")
+            runs.append((data, (out / "trajectory.csv").read_bytes(), (out / "diagnostics.csv").read_bytes()))
+        check(runs[0] == runs[1], f"two runs of {scene} differ")
 
 
 @case
@@ -639,6 +660,137 @@ def non_finite_run(ctx):
           "trajectory.csv must end with the last finite state")
     check(not (out / "plot.png").exists(), "the earlier outputs were not replaced")
     expect_no_staging_left(out)
+
+
+# ---- the energy guard and the close-encounter floor (issue #5, docs/stability.md) ----------------
+
+def harmonic_scene(dt, steps, guard=None, method="sesi2"):
+    """A harmonic pair on E^2 whose relative coordinate has w = 1: Strang's stability limit is
+    w dt = 2."""
+    lines = ['name = "stiff"', "[space]", 'kind = "euclidean"', "dim = 2",
+             "[[bodies]]", "mass = 1.0", "q = [1.0, 1.0]", "p = [0.0, 0.3]",
+             "[[bodies]]", "mass = 1.0", "q = [0.0, 0.0]", "p = [0.0, -0.3]",
+             "[[potential]]", 'kind = "harmonic-pair"', "k = 0.5",
+             "[integrator]", f'method = "{method}"', f"dt = {dt!r}", f"t_end = {dt * steps!r}"]
+    if guard is not None:
+        lines.append(f"energy_guard = {guard}")
+    return "\n".join(lines) + "\n"
+
+
+def expect_run_failure(ctx, result, out, reason, *words):
+    """Exit 3, one stderr line naming the step and time (and words), the summary marked
+    incomplete with the reason, and only finite rows kept."""
+    err = result.stderr
+    check(result.returncode == 3, f"exit status {result.returncode}, expected 3: {err!r}")
+    check(err.count("\n") == 1 and err.startswith("sesi: error: "), f"expected one line: {err!r}")
+    s = summary(out)
+    failure = s["failure"]
+    check(s["complete"] is False and s["stop_reason"] == reason, f"stop_reason {s['stop_reason']!r}")
+    check(f"step {failure['step']} " in err and f"t = {failure['t']:g}" in err, f"step and time: {err!r}")
+    for word in words:
+        check(word in err, f"stderr does not say {word!r}: {err!r}")
+    _, rows = read_csv(out / "trajectory.csv")
+    check(all(math.isfinite(v) for r in rows for v in r), "non-finite numbers in trajectory.csv")
+    check(rows[-1][0] == s["final_state"]["t"], "trajectory.csv must end with the last good state")
+    expect_no_staging_left(out)
+    return s
+
+
+@case
+def energy_guard_trips_above_stability_limit(ctx):
+    path = ctx.write("stiff.toml", harmonic_scene(2.04, 200))
+    out = ctx.work / "out"
+    s = expect_run_failure(ctx, ctx.run("run", path, "--out", out), out, "energy error exceeded",
+                           "energy error", "|E - E0| = ", "energy_guard = 100")
+    check(s["failure"]["step"] < 30, f"the guard tripped late: step {s['failure']['step']}")
+
+
+@case
+def energy_guard_quiet_below_stability_limit(ctx):
+    path = ctx.write("stiff.toml", harmonic_scene(1.96, 2000))
+    out = ctx.work / "out"
+    expect_ok(ctx.run("run", path, "--out", out, "-q"), "stable run at 0.98 of the limit")
+    check(summary(out)["complete"] is True, "not complete")
+
+
+@case
+def energy_guard_off(ctx):
+    # The same unstable run without the guard: nothing stops it (the energy grows by 1e20).
+    path = ctx.write("stiff.toml", harmonic_scene(2.04, 60, guard="false"))
+    out = ctx.work / "out"
+    expect_ok(ctx.run("run", path, "--out", out, "-q"), "energy_guard = false")
+    check(summary(out)["energy"]["max_rel_error"] > 1e10, "the run should have blown up")
+
+
+@case
+def energy_guard_from_scene(ctx):
+    # A tight guard set in the scene stops the (stable) seed scene at its first steps.
+    text = (ctx.source / "examples" / "scenes" / "paper.toml").read_text()
+    text = text.replace("[integrator]", "[integrator]\nenergy_guard = 1e-12", 1)
+    path = ctx.write("tight.toml", text)
+    out = ctx.work / "out"
+    expect_run_failure(ctx, ctx.run("run", path, "--out", out, "--t-end", "10"), out, "energy error exceeded",
+                       "energy_guard = 1e-12")
+
+
+HEAD_ON = """name = "head-on"
+# Two bodies falling onto each other from rest under cotangent gravity.
+[space]
+kind = "sphere"
+dim = 2
+[[bodies]]
+mass = 1.0
+q = [1.5707963267948966, -0.25]
+[[bodies]]
+mass = 1.0
+q = [1.5707963267948966, 0.25]
+[[potential]]
+kind = "cotangent-gravity"
+G = 1.0
+{floor}
+[integrator]
+dt = 0.001
+t_end = 1.0
+output_every = 10
+"""
+
+
+@case
+def close_encounter_head_on(ctx):
+    path = ctx.write("head-on.toml", HEAD_ON.format(floor="min_distance = 0.05"))
+    out = ctx.work / "out"
+    s = expect_run_failure(ctx, ctx.run("run", path, "--out", out), out, "close encounter",
+                           "bodies 1 and 2", "close-encounter floor 0.05", "cotangent-gravity")
+    check(0.2 < s["failure"]["t"] < 0.3, f"collision time {s['failure']['t']}")
+
+
+@case
+def close_encounter_head_on_defaults(ctx):
+    # With the default floor the steps jump over the encounter; the energy guard stops the run.
+    path = ctx.write("head-on.toml", HEAD_ON.format(floor=""))
+    out = ctx.work / "out"
+    result = ctx.run("run", path, "--out", out)
+    check(result.returncode == 3, f"exit status {result.returncode}: {result.stderr!r}")
+    s = summary(out)
+    check(s["stop_reason"] in ("close encounter", "energy error exceeded"), f"stop_reason {s['stop_reason']!r}")
+    _, rows = read_csv(out / "trajectory.csv")
+    check(all(math.isfinite(v) for r in rows for v in r), "non-finite numbers in trajectory.csv")
+
+
+@case
+def non_ascii_strings_read_back(ctx):
+    # The reader shields toml++ 3.3 from code points it mishandles (U+00A1..U+0499 and others,
+    # src/scene_reader.cpp); inside strings and comments they must read back unchanged.
+    name = "caf\u00e9-\u0416-\u30a2\u30fc-\ufb30"
+    text = (ctx.source / "examples" / "scenes" / "paper.toml").read_text()
+    text = f'# Scene \u2014 with \u00e9 and \u3001 in a comment\nname = "{name}"\n' + \
+        "\n".join(line for line in text.splitlines() if not line.startswith("name"))
+    path = ctx.work / "accents.toml"
+    path.write_text(text + "\n", encoding="utf-8")
+    result = ctx.run("run", path, "--t-end", "1", cwd=ctx.work)
+    expect_ok(result, "scene with non-ASCII strings")
+    check(result.stdout.startswith(name + ":"), f"name not read back: {result.stdout[:80]!r}")
+    check((ctx.work / "sesi-out" / name / "summary.json").is_file(), "output directory not named after the scene")
 
 
 def start_long_run(ctx, out, stderr=subprocess.PIPE, quiet=False):

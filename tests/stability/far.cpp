@@ -203,13 +203,15 @@ void framed(const char* name, LD D, double dt) {
   report(std::string(label) + " largest frame entry", double(max_entry));
   report(std::string(label) + " re-chartings", double(st_far.recharts()));
   CHECK(std::isfinite(double(xn.norm())));
+  // World distances resolve eps_ld e^D (5e-7 at D = 30, nothing at 300): checked where they can be.
+  if (D <= 30) CHECK(err_far <= 10 * err_near);
 }
 
 /// A body travelling from its closest approach 1 to distance ~D at unit speed with re-charting:
 /// no overflow, frames stay Lorentz, and the radial distance acosh(x_t) (exact to eps in r
 /// whatever the size of x_t) against the exact acosh(cosh 1 cosh D).
 template <int N, template <class> class Method>
-void traveller(const char* name, LD D, double dt) {
+double traveller(const char* name, LD D, double dt) {
   using Chart = sesi::Hyperbolic<N, double>;
   const auto sys = sesi::System(Chart(1.0), std::vector<double>{1.0});
   const Geodesic<N> g(1);
@@ -237,6 +239,19 @@ void traveller(const char* name, LD D, double dt) {
   report(std::string(label) + " energy error", std::fabs(sys.energy(x) - e0));
   report(std::string(label) + " re-chartings", double(st.recharts()));
   CHECK(std::isfinite(double(xt)));
+  CHECK(double(lorentz) <= 64 * stab::eps<double>());
+  CHECK(double(constraint) <= 64 * stab::eps<double>());
+  // The same traveller in one polar chart, in long double (no overflow up to q1 ~ 5000): the
+  // method's error for this orbit without re-charting.
+  using LChart = sesi::Hyperbolic<N, LD>;
+  const auto lsys = sesi::System(LChart(LD(1)), std::vector<LD>{LD(1)});
+  auto lx = g.template state<LD>(0);
+  Method<LChart> lst;
+  stab::run(lst, lsys, lx, LD(dt), steps);
+  const LD r_single = std::fabs(LD(lx.q(0, 0)) - r_exact);
+  report(std::string(label) + " radial error of the single-chart long double run", double(r_single));
+  report(std::string(label) + " radial error ratio re-charted / single chart", double(std::fabs(r_num - r_exact) / r_single));
+  return double(std::fabs(r_num - r_exact) / r_single);
 }
 
 /// Re-charting a state that is already far out in its chart (q_1 = D): the world point before and
@@ -257,29 +272,75 @@ void rechart_far_state(LD D) {
   char label[128];
   std::snprintf(label, sizeof label, "far H^%d rechart of a state at q1=%g", N, double(D));
   report(std::string(label) + ": world point moved by", double(world_distance(world, Vec<LD>(before))));
+  report(std::string(label) + ": bound eps e^(2 q1)", stab::eps<double>() * std::exp(2 * double(D)));
   report(std::string(label) + ": speed error", std::fabs(speed - 1));
+  const double moved = double(world_distance(world, Vec<LD>(before)));
+  CHECK(moved <= stab::eps<double>() * std::exp(2 * double(D)));
 }
 
 template <int N, template <class> class Method>
-void explore(const char* name, double dt) {
-  for (LD D : {1.0L, 10.0L, 20.0L, 30.0L, 300.0L}) {
+void plain(const char* name, double dt) {
+  const double near = plain_error<N, Method>(1, dt);
+  const double near_ld = plain_error<N, Method, LD>(1, dt);
+  for (LD D : {10.0L, 20.0L, 30.0L}) {
     char label[128];
-    std::snprintf(label, sizeof label, "far H^%d %s dt=%g plain D=%g", N, name, dt, double(D));
-    report(label, plain_error<N, Method>(D, dt));
+    std::snprintf(label, sizeof label, "far H^%d %s dt=%g plain chart D=%g", N, name, dt, double(D));
+    const double e = plain_error<N, Method>(D, dt), e_ld = plain_error<N, Method, LD>(D, dt);
+    report(std::string(label) + " error", e);
+    report(std::string(label) + " error / D=1", e / near);
+    report(std::string(label) + " long double error / D=1", e_ld / near_ld);
+    CHECK(std::isfinite(e));
+    // One chart is fine in double to 20 R, in long double to 30 R (sinh^2 q1 ~ e^60 is beyond
+    // double's 1/eps); at 30 R double needs re-charting (the frames tests).
+    if (D <= 20) CHECK(e <= 10 * near);
+    CHECK(e_ld <= 10 * near_ld);
   }
-  for (LD D : {1.0L, 30.0L}) {
-    char label[128];
-    std::snprintf(label, sizeof label, "far H^%d %s dt=%g plain long double D=%g", N, name, dt, double(D));
-    report(label, plain_error<N, Method, LD>(D, dt));
-  }
-  framed<N, Method>(name, 30, dt);
-  framed<N, Method>(name, 300, dt);
-  traveller<N, Method>(name, 30, dt);
-  traveller<N, Method>(name, 300, dt);
 }
 
 }  // namespace
 
-TEST_CASE("far: explore") {
-  for (LD D : {3.0L, 5.0L, 10.0L, 20.0L, 30.0L}) { rechart_far_state<2>(D); rechart_far_state<3>(D); }
+TEST_CASE("far hyperbolic: one chart to 20 R in double, 30 R in long double") {
+  plain<2, sesi::Strang>("sesi2", 0.01);
+  plain<3, sesi::Strang>("sesi2", 0.01);
+  plain<2, sesi::Yoshida4>("sesi4", 0.05);
+  plain<3, sesi::Yoshida4>("sesi4", 0.05);
+}
+
+TEST_CASE("far hyperbolic: 30 R and 300 R behind a frame, with re-charting") {
+  for (LD D : {30.0L, 300.0L}) {
+    framed<2, sesi::Strang>("sesi2", D, 0.01);
+    framed<3, sesi::Strang>("sesi2", D, 0.01);
+    framed<2, sesi::Yoshida4>("sesi4", D, 0.05);
+    framed<3, sesi::Yoshida4>("sesi4", D, 0.05);
+  }
+}
+
+// The radial error of a traveller with re-charting against the same orbit in one chart (long
+// double, where one chart is well conditioned): within 10x.
+void travellers(LD D) {
+  CHECK(traveller<2, sesi::Strang>("sesi2", D, 0.01) <= 10);
+  CHECK(traveller<3, sesi::Strang>("sesi2", D, 0.01) <= 10);
+  CHECK(traveller<2, sesi::Yoshida4>("sesi4", D, 0.05) <= 10);
+  CHECK(traveller<3, sesi::Yoshida4>("sesi4", D, 0.05) <= 10);
+}
+
+TEST_CASE("far hyperbolic: travelling to 30 R with re-charting") { travellers(30); }
+
+// KNOWN ISSUE (reported; docs/stability.md "Energy across re-chartings"): every re-charting on
+// H^n homes the body at radius 1 and the next one comes at radius 3, so the segments are
+// congruent and not time-symmetric, and the jump of the method's modified energy at each
+// re-charting is the same: the energy error drifts linearly in the number of re-chartings
+// (1.7e-4 after 11, 1.7e-3 after 116 for SESI 2, dt = 0.01), the speed with it, and the
+// position error grows quadratically: 60x the one-chart error at 300 R. This test fails until
+// recharting.hpp is changed; should_fail makes that visible (the suite goes red when it passes).
+TEST_CASE("far hyperbolic: travelling to 300 R with re-charting" * doctest::should_fail()) { travellers(300); }
+
+TEST_CASE("far hyperbolic: re-charting a state already far out in its chart") {
+  // rechart() builds the chart change from the body's current chart, so a state that is
+  // already at q1 = D loses ~eps e^(2 D) (recharting.hpp; the policy re-charts at q1 = 3, where
+  // this is round-off). Measured, and bounded by that figure.
+  for (LD D : {3.0L, 5.0L, 10.0L, 20.0L}) {
+    rechart_far_state<2>(D);
+    rechart_far_state<3>(D);
+  }
 }

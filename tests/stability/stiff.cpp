@@ -134,6 +134,43 @@ void check_method(LD documented) {
     CHECK(t.growth() <= 2.0);
     CHECK(std::isfinite(t.overall));
   }
+  // The energy guard with its default threshold: silent below the limit (its largest measure
+  // |E - E0| / (K0 + |V0|) is reported against the threshold), tripped above it with the
+  // documented status while the state is still finite.
+  {
+    const double dt = double(0.98L * limit);
+    Method st;
+    auto x = pair_state(1.0, 0.0);
+    const auto guard = sesi::EnergyGuard<double>::of(sys, x);
+    auto w = sys.make_workspace();
+    double worst = 0;
+    bool tripped = false;
+    for (long k = 1; k <= 20000; ++k) {
+      st.do_step(sys, x, double(k - 1) * dt, dt);
+      const auto g = guard.check(k, double(k) * dt, sys.energy(x, w));
+      worst = std::max(worst, double(g.error));
+      tripped = tripped || !g.ok();
+    }
+    stab::report("stiff " + name + " 0.98 limit: guard measure max |dE|/(K0+|V0|)", worst);
+    CHECK(!tripped);
+  }
+  {
+    const LD band = band_end<Table>(limit);
+    const LD x_trip = (band != 0 && 1.02L * limit >= band) ? (limit + band) / 2 : 1.02L * limit;
+    const double dt = double(x_trip);
+    Method st;
+    auto x = pair_state(1.0, 0.0);
+    const auto guard = sesi::EnergyGuard<double>::of(sys, x);
+    sesi::GuardResult<double> g;
+    for (long k = 1; k <= 20000 && g.ok(); ++k) {
+      st.do_step(sys, x, double(k - 1) * dt, dt);
+      g = guard.check(sys, x, k, double(k) * dt);
+    }
+    stab::report("stiff " + name + " above limit: guard tripped at step", double(g.step));
+    CHECK(g.status == sesi::GuardStatus::energy_error_exceeded);
+    CHECK(g.error > guard.relative());
+    CHECK(x.q.allFinite());
+  }
   // Above the limit: |E - E0| grows like lambda^(2 k), lambda the unstable eigenvalue. The first
   // unstable band of a composition can be narrower than 2%: Kahan-Li 8 is stable again from
   // 1.0141 times its limit. There 1.02 times the limit is stable (checked), and the blow-up is

@@ -56,7 +56,10 @@ class Hyperbolic {
   Scalar inverse_metric(int i, const Point& q) const {
     Scalar g = inv_r2_;
     if (i >= 1) g *= special::inv_sinh2(q[0]);
-    for (int k = 1; k < i; ++k) g *= special::inv_sin2(q[k]);
+    // k < N too (i < dim always): a compile-time bound keeps GCC 12 from a false
+    // -Warray-bounds on H^1, where this loop never runs.
+    constexpr int cap = N == Eigen::Dynamic ? std::numeric_limits<int>::max() : N;
+    for (int k = 1; k < i && k < cap; ++k) g *= special::inv_sin2(q[k]);
     return g;
   }
 
@@ -87,9 +90,7 @@ class Hyperbolic {
   /// left stale with own_trig = false, as in Sphere::level_flow).
   void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h, TrigType& t,
                   bool own_trig = true) const {
-    using std::cos;
     using std::cosh;
-    using std::sin;
     using std::sinh;
     const Scalar pi = p[i];
     if (i == 0) {
@@ -109,10 +110,7 @@ class Hyperbolic {
     const Scalar push = rate * pi;  // h * 2 K_i; dK_i/dq_1 = -2 coth(q_1) K_i, others -2 cot(q_k) K_i
     for (int k = 0; k < i; ++k) p[k] += push * t.c[k] * special::reciprocal_sine(t.s[k]);
     q[i] += rate;
-    if (own_trig) {
-      t.s[i] = sin(q[i]);
-      t.c[i] = cos(q[i]);
-    }
+    if (own_trig) detail::sin_cos(q[i], t.s[i], t.c[i]);
   }
   void embed(const TrigType& t, Ambient& x) const {
     x.resize(ambient_dim());
@@ -267,7 +265,8 @@ class Hyperbolic {
     using std::asinh;
     using std::sqrt;
     const Scalar chord2 = minkowski(x - y, x - y);  // space-like, >= 0 up to round-off
-    return Scalar(2) * radius_ * asinh(sqrt(chord2 > Scalar(0) ? chord2 : Scalar(0)) /
+    // Clamp round-off negatives only: a NaN chord stays NaN (a diverged state is not at distance 0).
+    return Scalar(2) * radius_ * asinh(sqrt(chord2 < Scalar(0) ? Scalar(0) : chord2) /
                                        (Scalar(2) * radius_));
   }
   /// Euclidean gradient of the distance in x: -eta (b + <a,b> a) / sinh(d/R), a = x/R, b = y/R.

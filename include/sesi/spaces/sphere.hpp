@@ -73,8 +73,6 @@ class Sphere {
   /// entry i comes before the next flow of level i).
   void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h, TrigType& t,
                   bool own_trig = true) const {
-    using std::cos;
-    using std::sin;
     Scalar g = inv_r2_;
     for (int k = 0; k < i; ++k) {
       const Scalar r = special::reciprocal_sine(t.s[k]);
@@ -87,10 +85,7 @@ class Sphere {
       for (int k = 0; k < i; ++k) p[k] += push * t.c[k] * special::reciprocal_sine(t.s[k]);
     }
     q[i] += rate;
-    if (own_trig) {
-      t.s[i] = sin(q[i]);
-      t.c[i] = cos(q[i]);
-    }
+    if (own_trig) detail::sin_cos(q[i], t.s[i], t.c[i]);
   }
   void embed(const TrigType& t, Ambient& x) const {
     x.resize(ambient_dim());

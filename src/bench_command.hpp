@@ -1,0 +1,30 @@
+#pragma once
+/// @file bench_command.hpp
+/// `sesi bench` (issue #4): work-precision sweeps of the SESI compositions against the
+/// reference integrators, written to DIR/work_precision.csv (docs/benchmarks.md).
+
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+namespace sesi::program {
+
+struct BenchOptions {
+  std::string scene = "paper";  ///< paper | kepler-s2 | kepler-h2 | a scene file
+  std::string methods;          ///< comma-separated method names (empty: all)
+  double t_end = 0;             ///< 0: the scene's default
+  std::string out;              ///< empty: sesi-out/bench/<scene>
+  bool quick = false;
+  int repeats = 0;              ///< 0: 3 (1 with --quick)
+  std::string figure;           ///< seed-fig1 | convergence (data of the seed's figures)
+};
+
+/// Add the `bench` subcommand to app, parsing into options.
+CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& options);
+
+/// Run it. @return the exit status.
+int bench_command(const BenchOptions& options);
+
+}  // namespace sesi::program

@@ -1,0 +1,75 @@
+#pragma once
+/// @file bench_types.hpp
+/// `sesi bench` (issue #4): the methods it compares, its settings and one CSV row per run.
+/// Compiled once (bench_command.cpp); the templated harness is bench_harness.hpp.
+
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace sesi::program::bench {
+
+enum class Method {
+  sesi2, sesi4, sesi4_suzuki, sesi4_mclachlan, sesi6, sesi6_kahan_li, sesi8, sesi8_kahan_li,
+  dopri5, rk78, bulirsch_stoer, rk4, implicit_midpoint, gauss4, tao2, tao4, rattle, geodesic2,
+  geodesic4, geodesic6
+};
+
+enum class Family { chart, adaptive, fixed_reference, embedding };
+
+struct MethodSpec {
+  Method id;
+  std::string_view name;  ///< as on the command line and in the CSV
+  int order;
+  Family family;
+};
+
+/// Every method, in CSV order.
+std::span<const MethodSpec> all_methods();
+/// The method called name, or nullptr.
+const MethodSpec* find_method(std::string_view name);
+
+/// One run of one method at one step (or tolerance).
+struct Row {
+  std::string method;
+  int order = 0;
+  double dt_or_tol = 0;
+  long steps = 0;
+  long force_evals = 0;
+  double wall_seconds = 0;
+  double final_error = 0;
+  double max_energy_error = 0;
+  double max_momentum_drift = 0;
+};
+
+struct Settings {
+  double t_end = 0;         ///< length of every run
+  int samples = 1000;       ///< common observation times: t_end * j / samples, j = 0..samples
+  int repeats = 3;          ///< timed repeats (the minimum is reported)
+  bool quick = false;       ///< a short sweep (ctest)
+  double run_budget = 20;   ///< seconds: a sweep stops refining after a run this long
+  std::vector<const MethodSpec*> methods;
+};
+
+/// One sample of a traced run (seed-fig1): body 1's position, the energy error and the
+/// momentum-map error (all components).
+struct TraceRow {
+  std::string method;
+  double t = 0;
+  double x = 0, y = 0, z = 0;
+  double energy_error = 0;
+  std::vector<double> momentum_error;
+};
+
+/// What a scene's bench returns: the rows and the comment lines for the CSV header.
+struct Result {
+  std::vector<Row> rows;
+  std::vector<std::string> notes;
+};
+
+/// Sweep parameters of a method: steps dt = base / k (fixed-step methods; base = t_end /
+/// samples, so that every sample time is a grid point), or tolerances (adaptive ones).
+std::vector<double> sweep(const MethodSpec& m, const Settings& s);
+
+}  // namespace sesi::program::bench

@@ -1,0 +1,91 @@
+#!/usr/bin/env python3
+"""Runs `sesi bench --quick` on one scene and checks work_precision.csv (issue #4):
+the header and columns, one or more rows per method (all methods of the scene), finite
+non-negative numbers, steps and force evaluations growing as the step (tolerance) falls, and
+every method's final error falling from its coarsest to its finest run."""
+import argparse
+import csv
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+COLUMNS = ["method", "order", "dt_or_tol", "steps", "force_evals", "wall_seconds", "final_error",
+           "max_energy_error", "max_momentum_drift"]
+METHODS = ["sesi2", "sesi4", "sesi4-suzuki", "sesi4-mclachlan", "sesi6", "sesi6-kahan-li", "sesi8",
+           "sesi8-kahan-li", "dopri5", "rk78", "bulirsch-stoer", "rk4", "implicit-midpoint",
+           "gauss4", "tao2", "tao4", "rattle", "geodesic2", "geodesic4", "geodesic6"]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sesi", required=True)
+    ap.add_argument("--source", required=True)
+    ap.add_argument("--work", required=True)
+    ap.add_argument("--scene", required=True)
+    a = ap.parse_args()
+    out = os.path.join(a.work, a.scene)
+    shutil.rmtree(out, ignore_errors=True)
+    scene = a.scene
+    if scene == "file":
+        scene = os.path.join(a.source, "examples", "scenes", "paper.toml")
+    start = time.monotonic()
+    run = subprocess.run([a.sesi, "bench", "--quick", "--scene", scene, "--out", out],
+                         capture_output=True, text=True, timeout=55)
+    elapsed = time.monotonic() - start
+    sys.stderr.write(run.stderr)
+    if run.returncode != 0:
+        print(f"FAIL: exit status {run.returncode}")
+        return 1
+    failures = []
+    with open(os.path.join(out, "work_precision.csv")) as f:
+        lines = f.read().splitlines()
+    notes = [l for l in lines if l.startswith("#")]
+    body = [l for l in lines if not l.startswith("#")]
+    if not any(n.startswith("# reference: ") for n in notes):
+        failures.append("no '# reference:' comment line")
+    if body[0].split(",") != COLUMNS:
+        failures.append(f"header {body[0]!r}")
+    rows = list(csv.DictReader(body))
+    by_method = {}
+    for r in rows:
+        for k in COLUMNS[1:]:
+            v = float(r[k])
+            if not math.isfinite(v) or v < 0:
+                failures.append(f"{r['method']}: {k} = {r[k]}")
+        by_method.setdefault(r["method"], []).append(r)
+    for m in METHODS:
+        runs = by_method.get(m, [])
+        if m.startswith("tao") and a.scene.startswith("kepler"):
+            # Tao's method with its default binding omega = 20 (reference/tao.hpp) diverges at
+            # most of these steps on the Kepler scenes (docs/benchmarks.md): not required here.
+            continue
+        if len(runs) < 2:
+            failures.append(f"{m}: {len(runs)} rows (want >= 2)")
+            continue
+        # Coarsest first: steps grow as dt or the tolerance falls.
+        runs.sort(key=lambda r: -float(r["dt_or_tol"]))
+        steps = [int(r["steps"]) for r in runs]
+        # (Bulirsch-Stoer may take fewer, higher-order steps at a tighter tolerance.)
+        if m not in ("dopri5", "rk78", "bulirsch-stoer") and steps != sorted(steps):
+            failures.append(f"{m}: steps {steps} do not grow as the step falls")
+        errors = [float(r["final_error"]) for r in runs]
+        if not errors[-1] < errors[0]:
+            failures.append(f"{m}: final error {errors} does not fall with the step")
+        if float(runs[-1]["force_evals"]) <= 0:
+            failures.append(f"{m}: no force evaluations counted")
+    unknown = set(by_method) - set(METHODS)
+    if unknown:
+        failures.append(f"unknown methods {sorted(unknown)}")
+    if elapsed > 50:
+        failures.append(f"took {elapsed:.1f} s (budget 50 s)")
+    for f in failures:
+        print("FAIL:", f)
+    print(f"{len(rows)} rows, {len(by_method)} methods, {elapsed:.2f} s")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
