@@ -291,7 +291,7 @@ class Harness {
     StateT x = x0_;
     long steps = 0;
     if (rechart_) {
-      sesi::Recharting<sesi::Composition<Table, Chart>> st(sesi::RechartPolicy<double>{});
+      sesi::RechartingComposition<Table, Chart> st(sesi::RechartPolicy<double>{});
       steps = long(sesi::reference::integrate_fixed(st, sys_, x, 0.0, s_.t_end, dt, times, obs));
     } else {
       sesi::Composition<Table, Chart> st;

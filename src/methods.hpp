@@ -54,20 +54,22 @@ class OdeintStyleStepper final : public AnyStepper<Sys> {
 
 /// The composition engine of the program for a chart: one type for every coefficient table,
 /// re-charting where the chart allows it.
+/// Re-charted runs use the kick-drift-kick form (sesi::RechartingComposition, docs/charts.md).
 template <class Chart>
 using ProgramComposition =
     std::conditional_t<sesi::Rechartable<Chart>,
-                       sesi::Recharting<sesi::Composition<coefficients::Runtime, Chart>>,
+                       sesi::RechartingComposition<coefficients::Runtime, Chart>,
                        sesi::Composition<coefficients::Runtime, Chart>>;
 
 /// A composition with the weights of Table, as ProgramComposition.
 template <class Table, class Chart>
 ProgramComposition<Chart> make_composition() {
-  auto engine = sesi::Composition<coefficients::Runtime, Chart>::template of<Table>();
   if constexpr (sesi::Rechartable<Chart>) {
+    using Engine = sesi::Composition<coefficients::Runtime, Chart, sesi::Splitting::kick_drift_kick>;
+    auto engine = Engine::template of<Table>();
     return ProgramComposition<Chart>(sesi::RechartPolicy<typename Chart::Scalar>{}, std::move(engine));
   } else {
-    return engine;
+    return sesi::Composition<coefficients::Runtime, Chart>::template of<Table>();
   }
 }
 

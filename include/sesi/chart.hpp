@@ -108,4 +108,9 @@ typename C::Scalar kinetic_energy(const C& chart, const typename C::Point& q,
   return k;
 }
 
+/// What sesi::rechart does with a body (recharting.hpp, docs/charts.md): nothing, a turn (the
+/// half-turn about the body: same q, p -> -p, a frame that reverses the body's tangent space),
+/// or a homing (a new frame where the chart is best conditioned).
+enum class RechartAction { none, turn, home };
+
 }  // namespace sesi

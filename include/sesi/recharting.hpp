@@ -25,15 +25,19 @@ namespace sesi {
 /// When and where to re-chart (defaults documented in docs/charts.md).
 template <class Scalar>
 struct RechartPolicy {
-  /// Re-chart when a polar angle's |sin q_k| falls below this (S^n, n >= 2; angles of H^n).
-  /// 1/4 keeps the chart's 1/sin^2 factors below 16.
-  Scalar min_sine = Scalar(1) / Scalar(4);
-  /// H^n, n >= 2: re-chart when the radius q_1 falls below this (the polar origin is singular).
+  /// A polar angle (S^n, n >= 2; the angles of H^n) is in danger when |sin q_k| falls below
+  /// this, deep below half of it. 1/2 keeps the chart's 1/sin^2 factors below 4 where bodies
+  /// move (a turned body recedes); the chart-dependent terms of the modified energy, and so the
+  /// residual jumps at re-chartings, grow with them (docs/charts.md has the measurements).
+  Scalar min_sine = Scalar(1) / Scalar(2);
+  /// H^n, n >= 2: the radius q_1 is in danger below this (the polar origin is singular), deep
+  /// below half of it.
   Scalar min_radius = Scalar(1) / Scalar(4);
-  /// H^n: re-chart when the radius exceeds this (sinh and cosh grow like e^{q_1}).
+  /// H^n: the radius is in danger above this (sinh and cosh grow like e^{q_1}), deep 1 beyond.
   Scalar max_radius = Scalar(3);
-  /// H^n, n >= 2: the radius at which a re-charted body is placed, moving tangentially, so that
-  /// its geodesic's closest approach to the new origin is this radius.
+  /// H^n, n >= 2: the radius at which a homed body is placed, moving tangentially, so that its
+  /// geodesic's closest approach to the new origin is this radius (below max_radius / 2, so that
+  /// a homed body is turned, not homed, when it reaches max_radius).
   Scalar home_radius = Scalar(1);
 };
 
@@ -44,43 +48,65 @@ concept Rechartable =
     requires(const C& c, const typename C::Point& q, typename C::Point& qo, typename C::Point& po,
              const typename C::Ambient& x, const RechartPolicy<typename C::Scalar>& policy,
              typename State<C>::Frame& frame, typename C::Scalar m) {
-      { c.needs_rechart(q, policy) } -> std::convertible_to<bool>;
-      c.home(x, x, m, policy, frame, qo, po);  // frame <- the chart change L (see below)
+      { c.rechart_action(q, q, policy) } -> std::same_as<RechartAction>;
+      c.turn(q, frame);                        // frame <- the half-turn about the body
+      c.home(x, x, m, policy, frame, qo, po);  // frame <- the homing change L (see below)
     };
 
-/// Re-chart every body of s that needs it under policy; returns how many were re-charted.
-/// The first call gives s identity frames.
+/// Re-chartings done by one call of rechart().
+struct Recharted {
+  int turned = 0;
+  int homed = 0;
+  int total() const { return turned + homed; }
+};
+
+/// Re-chart every body of s whose chart says so (Chart::rechart_action) under policy. The first
+/// call gives s identity frames.
+///
+/// A body moving deeper into a danger zone (near a pole, near or far from the H^n origin) is
+/// turned: its frame F becomes F T, T the half-turn about the body (an isometry fixing it and
+/// reversing its tangent space), so q stays and p changes sign: in the new chart the body moves
+/// back out of the zone it was entering, along the same chart curve reversed, while its world
+/// state is unchanged. Because q stays and p only changes sign, the method's modified energy,
+/// which a symmetric method has even in p, is the same in both charts (for the chart-dependent
+/// kinetic terms), so re-chartings add no drift (docs/charts.md; tests/stability/long.cpp).
+/// A body deep in a zone, or one a turn cannot help, is homed instead (Chart::home).
 template <class Sys>
-int rechart(const Sys& sys, State<typename Sys::Chart>& s,
-            const RechartPolicy<typename Sys::Scalar>& policy) {
+Recharted rechart(const Sys& sys, State<typename Sys::Chart>& s,
+                  const RechartPolicy<typename Sys::Scalar>& policy) {
   using Chart = typename Sys::Chart;
-  if constexpr (!Rechartable<Chart>) {
-    return 0;
-  } else {
+  Recharted done;
+  if constexpr (Rechartable<Chart>) {
     const Chart& chart = sys.chart();
     if (!s.framed()) s.enable_frames(chart.ambient_dim());
     typename Chart::Point q(chart.dim()), p(chart.dim());
     typename Chart::Ambient x(chart.ambient_dim()), v(chart.ambient_dim());
-    int count = 0;
+    typename State<Chart>::Frame change(chart.ambient_dim(), chart.ambient_dim());
     for (int b = 0; b < s.bodies(); ++b) {
       q = s.q.col(b);
-      if (!chart.needs_rechart(q, policy)) continue;
       p = s.p.col(b);
-      chart.embed(q, x);
-      chart.velocity(q, p, sys.mass(b), v);
-      // The change L is computed from the body's point in its current chart, where all entries
-      // are moderate (the policy keeps it there), and composed: world = F L x_new. On H^n this
-      // keeps every L well conditioned however far the body is from the world origin.
-      typename State<Chart>::Frame change(chart.ambient_dim(), chart.ambient_dim());
-      chart.home(x, v, sys.mass(b), policy, change, q, p);
+      const RechartAction action = chart.rechart_action(q, p, policy);
+      if (action == RechartAction::none) continue;
+      if (action == RechartAction::turn) {
+        chart.turn(q, change);
+        s.p.col(b) = -p;
+        ++done.turned;
+      } else {
+        chart.embed(q, x);
+        chart.velocity(q, p, sys.mass(b), v);
+        // The change L is computed from the body's point in its current chart, where all
+        // entries are moderate (the policy keeps it there), and composed: world = F L x_new. On
+        // H^n this keeps every L well conditioned however far the body is from the world origin.
+        chart.home(x, v, sys.mass(b), policy, change, q, p);
+        s.q.col(b) = q;
+        s.p.col(b) = p;
+        ++done.homed;
+      }
       auto& frame = s.frames[static_cast<std::size_t>(b)];
       frame = (frame * change).eval();
-      s.q.col(b) = q;
-      s.p.col(b) = p;
-      ++count;
     }
-    return count;
   }
+  return done;
 }
 
 /// The same state in the identity frames (the space's own chart): q, p of each body recomputed
@@ -137,16 +163,27 @@ class Recharting : public Method {
   void do_step(Sys&& system, state_type& x, time_type t, time_type dt) {
     Method::do_step(system, x, t, dt);
     using Raw = std::remove_cvref_t<Sys>;
-    recharts_ += rechart(detail::unwrap<Raw>::get(system), x, policy_);
+    const Recharted done = rechart(detail::unwrap<Raw>::get(system), x, policy_);
+    turns_ += done.turned;
+    homes_ += done.homed;
   }
 
   const RechartPolicy<Scalar>& policy() const { return policy_; }
-  /// Re-chartings done so far.
-  long recharts() const { return recharts_; }
+  /// Re-chartings done so far (turns and homings).
+  long recharts() const { return turns_ + homes_; }
+  /// Homings done so far (the re-chartings that change the modified energy; docs/charts.md).
+  long homes() const { return homes_; }
 
  private:
   RechartPolicy<Scalar> policy_{};
-  long recharts_ = 0;
+  long turns_ = 0;
+  long homes_ = 0;
 };
+
+/// The composition to re-chart with: Table's weights over the kick-drift-kick form, whose
+/// chart-dependent second-order terms are purely kinetic, so that turns leave the modified
+/// energy unchanged to that order (docs/charts.md; tests/stability/long.cpp).
+template <class Table, class Chart>
+using RechartingComposition = Recharting<Composition<Table, Chart, Splitting::kick_drift_kick>>;
 
 }  // namespace sesi

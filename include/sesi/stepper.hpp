@@ -3,10 +3,18 @@
 /// One composition engine over coefficient tables (coefficients.hpp).
 ///
 /// The base step is the seed's hierarchical Strang splitting (seed paper, eqs. 6-8 and
-/// Discussion): half flows of K_1..K_n, the full potential kick, half flows of K_n..K_1. Each
-/// flow is exact and explicit (chart.hpp), so every composition is explicit, symplectic and,
-/// being palindromic, time-reversible. Where two stages meet, their K_1 half flows are fused into
-/// one (K_1 depends on p_1 alone, so its flows compose exactly).
+/// Discussion) of H = K + V with K = K_1 + ... + K_n. Each flow is exact and explicit
+/// (chart.hpp), so every composition is explicit, symplectic and, being palindromic,
+/// time-reversible. Two forms (Splitting):
+///  - drift-kick-drift, the default and the seed's form as printed: half flows of K_1..K_n, the
+///    full kick, half flows of K_n..K_1. Where two stages meet, their K_1 half flows are fused
+///    into one (K_1 depends on p_1 alone, so its flows compose exactly).
+///  - kick-drift-kick: half kick, K_1..K_{n-1} for h/2, K_n for h, K_{n-1}..K_1 for h/2, half
+///    kick. The kinetic sweep is itself symmetric, so at second order the chart enters the
+///    modified Hamiltonian only through purely kinetic brackets, even in p: the form to use with
+///    re-charting (recharting.hpp, RechartingComposition; docs/charts.md), where it keeps the
+///    energy error bounded. Kicks where two stages meet fuse, and the first kick of a step
+///    reuses the last gradient of the step before: one force evaluation per stage.
 ///
 /// Steppers model odeint's Stepper concept (order(), do_step(sys, x, t, dt), the usual types);
 /// sesi/odeint.hpp adds the stepper_category tag so that integrate_const drives them.
@@ -94,15 +102,22 @@ class Composition {
     using Raw = std::remove_cvref_t<Sys>;
     const auto& sys = detail::unwrap<Raw>::get(system);
     // The trig caches left by the last step are valid if q is what that step produced.
-    if (!(last_q_.cols() == x.q.cols() && last_q_.rows() == x.q.rows() && last_q_ == x.q)) {
-      sys.refresh(x, ws_);  // sizes the workspace; one sine and cosine per coordinate
-    }
+    const bool q_unchanged =
+        last_q_.cols() == x.q.cols() && last_q_.rows() == x.q.rows() && last_q_ == x.q;
+    if (!q_unchanged) sys.refresh(x, ws_);  // sizes the workspace; one sine and cosine per coordinate
     if constexpr (Form == Splitting::drift_kick_drift) {
       step_dkd(sys, x, dt);
     } else {
-      step_kdk(sys, x, dt);
+      step_kdk(sys, x, dt, q_unchanged);
     }
     last_q_ = x.q;
+  }
+
+  /// Forget what the last step left (the trig caches and the last gradient), e.g. after changing
+  /// the system's parameters in place; do_step notices a new q, new frames or another system.
+  void reset() {
+    last_q_.resize(0, 0);
+    grad_system_ = nullptr;
   }
 
  private:
@@ -161,14 +176,23 @@ class Composition {
     }
   }
 
+  /// The kick-drift-kick form. Its first kick is at the point of the last step's last kick, so
+  /// it reuses that kick's gradient when nothing it depends on changed (first same as last, as
+  /// odeint's velocity_verlet keeps its acceleration): one force evaluation per stage.
   template <class Sys>
-  void step_kdk(const Sys& sys, state_type& x, Scalar dt) {
+  void step_kdk(const Sys& sys, state_type& x, Scalar dt, bool q_unchanged) {
     const int top = sys.dim() - 1;
     const std::size_t s = w_.size();
+    const bool reuse = q_unchanged && grad_.cols() == x.p.cols() && grad_.rows() == x.p.rows() &&
+                       grad_system_ == static_cast<const void*>(&sys) && grad_frames_ == x.frames;
     Scalar pending = w_[0] * dt / Scalar(2);  // half kick carried over from the last stage
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar h = w_[k] * dt;
-      sys.kick_cached(x, pending, ws_);
+      if (k == 0 && reuse) {
+        x.p.noalias() -= pending * grad_;
+      } else {
+        sys.kick_cached(x, pending, ws_, grad_);
+      }
       // Kinetic part: K_1(h/2)..K_{n-1}(h/2) K_n(h) K_{n-1}(h/2)..K_1(h/2).
       if (top == 0) {
         forward(sys, x, h, h, 0);
@@ -179,13 +203,19 @@ class Composition {
       }
       pending = h / Scalar(2) + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
     }
-    sys.kick_cached(x, pending, ws_);
+    sys.kick_cached(x, pending, ws_, grad_);
+    grad_system_ = &sys;
+    grad_frames_ = x.frames;
   }
 
   weights_type w_;
   [[no_unique_address]] std::conditional_t<runtime_table, order_type, std::monostate> order_{};
   Workspace<Chart> ws_;
   typename state_type::Matrix last_q_;  // q after the last step: its trig is in ws_
+  // The kick-drift-kick form's last gradient: dV/dq at last_q_, for that system and frames.
+  typename state_type::Matrix grad_;
+  const void* grad_system_ = nullptr;
+  std::vector<typename state_type::Frame> grad_frames_;
 };
 
 /// The named methods (names as in the sesi program).

@@ -196,6 +196,20 @@ class System {
       }
     }
   }
+  /// The same kick, also keeping the chart gradient dV/dq of every body in grad (dim x bodies),
+  /// for a stepper that reuses it while q and the frames stay as they are.
+  void kick_cached(StateType& s, Scalar h, Workspace& w, typename StateType::Matrix& grad) const {
+    if constexpr (has_potential) {
+      embed_cached(s, w);
+      ambient_gradient(w);
+      grad.resize(dim(), bodies());
+      for (int b = 0; b < bodies(); ++b) {
+        pull_back(s, w, b);
+        grad.col(b) = w.p;
+        s.p.col(b) -= h * w.p;
+      }
+    }
+  }
 
   /// Chart gradient dV/dq of all bodies (dim x bodies), for reference methods and tests.
   void potential_gradient(const StateType& s, Workspace& w,

@@ -97,10 +97,14 @@ double max_distance(const Chart& chart, const A& X, const B& Y) {
   return d;
 }
 
+/// Method's table re-charted, as the library recommends (sesi::RechartingComposition).
+template <template <class> class Method, class Chart>
+using Rech = sesi::RechartingComposition<typename Method<Chart>::table, Chart>;
+
 /// Energy error record of a run: max |E - E0| over the first and the last tenth of the steps.
 struct Tenths {
   double first = 0, last = 0, overall = 0;
-  long recharts = 0;
+  long recharts = 0, homes = 0;
   /// last / first: bounded energy error means a ratio of order one (the tests ask <= 2).
   double growth() const { return last / first; }
 };
@@ -122,7 +126,10 @@ Tenths energy_tenths(Stepper& st, const Sys& sys, St& x, typename Sys::Scalar dt
     if (k < tenth) r.first = std::max(r.first, e);
     if (k >= steps - tenth) r.last = std::max(r.last, e);
   }
-  if constexpr (requires { st.recharts(); }) r.recharts = st.recharts();
+  if constexpr (requires { st.recharts(); }) {
+    r.recharts = st.recharts();
+    r.homes = st.homes();
+  }
   return r;
 }
 

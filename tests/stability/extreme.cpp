@@ -223,7 +223,7 @@ double free_error(int n, S dt, S T) {
   Vec<S> x0, v0;
   generic_point<Sphere>(n, 0.9, 0.6, x0, v0);
   auto x = stab::from_world(sys, Mat<S>(x0), Mat<S>(v0));
-  sesi::Recharting<Method<Chart>> st;
+  stab::Rech<Method, Chart> st;
   sesi::rechart(sys, x, st.policy());
   const long steps = std::lround(T / dt);
   stab::run(st, sys, x, dt, steps);
@@ -242,7 +242,7 @@ Mat<S> pair_points(int n, S dt, S T) {
   X << x0, x1;
   V << 0.3 * v0, 0.5 * v1;
   auto x = stab::from_world(sys, X, V);
-  sesi::Recharting<Method<Chart>> st;
+  stab::Rech<Method, Chart> st;
   sesi::rechart(sys, x, st.policy());
   stab::run(st, sys, x, dt, std::lround(T / dt));
   return sesi::embedding_points(sys, x);

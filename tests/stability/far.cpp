@@ -167,7 +167,7 @@ void framed(const char* name, LD D, double dt) {
   far.enable_frames(a);
   far.frames[0] = (rot * stab::boost<LD>(a, 0, D - 1) * rot.transpose()).template cast<double>();
   const Mat<LD> f0 = far.frames[0].template cast<LD>();
-  sesi::Recharting<Method<Chart>> st_near, st_far;
+  stab::Rech<Method, Chart> st_near, st_far;
   sesi::rechart(sys, near, st_near.policy());
   stab::run(st_near, sys, near, dt, steps);
   stab::run(st_far, sys, far, dt, steps);
@@ -216,7 +216,7 @@ double traveller(const char* name, LD D, double dt) {
   const auto sys = sesi::System(Chart(1.0), std::vector<double>{1.0});
   const Geodesic<N> g(1);
   auto x = g.template state<double>(0);
-  sesi::Recharting<Method<Chart>> st;
+  stab::Rech<Method, Chart> st;
   sesi::rechart(sys, x, st.policy());
   const long steps = std::lround(double(D) / dt);
   const double e0 = sys.energy(x);
@@ -326,14 +326,11 @@ void travellers(LD D) {
 
 TEST_CASE("far hyperbolic: travelling to 30 R with re-charting") { travellers(30); }
 
-// KNOWN ISSUE (reported; docs/stability.md "Energy across re-chartings"): every re-charting on
-// H^n homes the body at radius 1 and the next one comes at radius 3, so the segments are
-// congruent and not time-symmetric, and the jump of the method's modified energy at each
-// re-charting is the same: the energy error drifts linearly in the number of re-chartings
-// (1.7e-4 after 11, 1.7e-3 after 116 for SESI 2, dt = 0.01), the speed with it, and the
-// position error grows quadratically: 60x the one-chart error at 300 R. This test fails until
-// recharting.hpp is changed; should_fail makes that visible (the suite goes red when it passes).
-TEST_CASE("far hyperbolic: travelling to 300 R with re-charting" * doctest::should_fail()) { travellers(300); }
+// Before the turns of recharting.hpp, every re-charting homed the body at radius 1 and the next
+// came at radius 3: congruent segments, not time-symmetric, so the modified energy jumped by the
+// same amount each time and the position error at 300 R was 60x the one-chart error. A turned
+// body retraces its chart curve, with no jump for free motion.
+TEST_CASE("far hyperbolic: travelling to 300 R with re-charting") { travellers(300); }
 
 TEST_CASE("far hyperbolic: re-charting a state already far out in its chart") {
   // rechart() builds the chart change from the body's current chart, so a state that is

@@ -41,7 +41,7 @@ void pole_grazing() {
       auto at = [&](S t) { return Vec<S>(std::cos(t) * c + std::sin(t) * m); };
       auto vel = [&](S t) { return Vec<S>(-std::sin(t) * c + std::cos(t) * m); };
       auto x = stab::from_world(sys, Mat<S>(at(-th)), Mat<S>(vel(-th)));
-      sesi::Recharting<sesi::Strang<Chart>> st;
+      stab::Rech<sesi::Strang, Chart> st;
       sesi::rechart(sys, x, st.policy());
       stab::run(st, sys, x, dt, steps);
       // Distances in long double from the numbers the run produced.

@@ -124,8 +124,12 @@ class Hyperbolic {
   /// R sinh q_1.
   void pullback(const TrigType& t, const Ambient& g, Point& out) const {
     out.resize(dim_);
-    const Scalar gu = detail::unit_sphere_pullback(t, 1, dim_, radius_ * t.s[0], g, out);
-    out[0] = radius_ * (t.c[0] * gu + t.s[0] * g[dim_]);
+    if constexpr (N == 1) {
+      out[0] = radius_ * (t.c[0] * g[0] + t.s[0] * g[1]);  // u_0 = (1); spelled out for GCC 12
+    } else {
+      const Scalar gu = detail::unit_sphere_pullback(t, 1, dim_, radius_ * t.s[0], g, out);
+      out[0] = radius_ * (t.c[0] * gu + t.s[0] * g[dim_]);
+    }
   }
 
   // ---- the same from q alone ----
@@ -181,19 +185,55 @@ class Hyperbolic {
   }
 
   // ---- re-charting (recharting.hpp, docs/charts.md) ----
-  /// Is q too near the polar origin (q_1 < min_radius, n >= 2), too far from it
-  /// (|q_1| > max_radius), or near a pole of the angles (|sin q_k| < min_sine, 1 <= k < n-1)?
+  /// What rechart() does with a body at (q, p) (DangerFlags::action). Danger zones: the radius
+  /// |q_1| above policy.max_radius (deep 1 beyond it; sinh and cosh grow like e^{q_1}), below
+  /// policy.min_radius for n >= 2 (the polar origin; deep below half of it), and the polar angles
+  /// 1 <= k < n-1 with |sin q_k| < policy.min_sine (deep below half of it). A turn keeps the
+  /// body's geodesic, whose closest approach b to the chart origin is unchanged, so a body
+  /// leaving the far zone on a geodesic with b > max_radius / 2 is homed instead: its turned
+  /// segment would be short (none at all for b > max_radius).
   template <class Policy>
-  bool needs_rechart(const Point& q, const Policy& policy) const {
+  RechartAction rechart_action(const Point& q, const Point& p, const Policy& policy) const {
     using std::abs;
-    using std::sin;
-    if (abs(q[0]) > policy.max_radius) return true;
-    if constexpr (N == 1) return false;  // no angles (GCC 12 misreads the loop for H^1)
-    if (dim_ >= 2 && q[0] < policy.min_radius) return true;
-    for (int k = 1; k + 1 < dim_; ++k) {
-      if (abs(sin(q[k])) < policy.min_sine) return true;
+    detail::DangerFlags f;
+    if constexpr (N != 1) {  // discarded for H^1 (no angles), where GCC 12 misreads the loop
+      if (dim_ >= 2) {
+        detail::polar_angle_danger(q, p, 1, dim_ - 1, policy.min_sine, f);
+        if (q[0] < policy.min_radius) f.add(q[0] < policy.min_radius / Scalar(2), p[0]);
+      }
     }
-    return false;
+    if (f.deep) return RechartAction::home;
+    if (abs(q[0]) > policy.max_radius) {
+      const Scalar out = q[0] * p[0];  // > 0: moving outward
+      const Scalar sinh_half = std::sinh(policy.max_radius / Scalar(2));
+      const bool deep = abs(q[0]) > policy.max_radius + Scalar(1) ||
+                        (out > 0 && dim_ >= 2 && closest_approach_sinh2(q, p) > sinh_half * sinh_half);
+      f.add(deep, -out);
+    }
+    return f.action();
+  }
+  /// The turn's chart change (Lorentz): the half-turn 2 y (eta y)^T / <y, y>_L - I about
+  /// y = embed(q) (<y, y>_L = -R^2).
+  template <class Frame>
+  void turn(const Point& q, Frame& change) const {
+    Ambient y(ambient_dim());
+    embed(q, y);
+    Ambient eta_y = y;
+    eta_y[dim_] = -y[dim_];
+    detail::half_turn(y, eta_y, change);
+  }
+  /// sinh^2 b, b the closest approach to the chart origin of the geodesic through (q, p): the
+  /// angular momentum sinh(q_1) |w| (w the tangential velocity over R) is conserved and equals
+  /// sinh(b) |v| there, so sinh^2 b = sinh^2 q_1 (1 - radial share of the speed^2); the speed^2
+  /// is sum_i p_i^2 g^i (g^i the inverse metric), its radial share p_1^2 g^1.
+  Scalar closest_approach_sinh2(const Point& q, const Point& p) const {
+    Scalar speed2(0);
+    for (int i = 0; i < dim_; ++i) speed2 += p[i] * p[i] * inverse_metric(i, q);
+    const Scalar sh = std::sinh(q[0]);
+    if (!(speed2 > Scalar(0))) return sh * sh;
+    const Scalar radial = p[0] * p[0] * inv_r2_;
+    using std::max;
+    return sh * sh * max(Scalar(0), Scalar(1) - radial / speed2);
   }
   /// The chart change L (Lorentz) that puts the body at radius policy.home_radius of the new
   /// chart (at its origin for n = 1), moving tangentially along the last angle with every other

@@ -15,6 +15,8 @@
 #include <Eigen/Core>
 #include <Eigen/QR>
 
+#include "sesi/chart.hpp"
+
 namespace sesi {
 
 /// Sines and cosines of one body's chart coordinates (on H^n, entry 0 holds sinh and cosh of the
@@ -156,6 +158,52 @@ void complete_orthonormal(const Lead& lead, Q& q) {
       qr(lead);
   q = qr.householderQ() * Square::Identity(a, a);
   q.leftCols(lead.cols()) = lead;
+}
+
+/// Where a body stands with respect to the chart's singular sets, gathered over its coordinates
+/// (recharting.hpp): in a danger zone and moving deeper (approaching), in one and moving out
+/// (receding), or so deep that only a homing helps.
+struct DangerFlags {
+  bool approaching = false;
+  bool receding = false;
+  bool deep = false;
+
+  /// Turn a body that approaches a danger zone and recedes from none (after the turn, which
+  /// reverses its motion in the chart, it recedes from all); home it when it is deep, or when a
+  /// turn would leave it approaching another zone.
+  RechartAction action() const {
+    if (deep || (approaching && receding)) return RechartAction::home;
+    return approaching ? RechartAction::turn : RechartAction::none;
+  }
+  /// A coordinate in a danger zone whose distance to the singular set changes at the signed
+  /// rate `rate` (negative: approaching), deep when `deep_here`.
+  void add(bool deep_here, auto rate) {
+    deep = deep || deep_here;
+    if (rate < 0) approaching = true;
+    if (rate > 0) receding = true;
+  }
+};
+
+/// The polar angles q[a..b) with |sin q_k| < min_sine (deep below min_sine / 2). |sin q_k|
+/// changes at the rate sin q_k cos q_k dq_k/dt / |sin q_k|, and dq_k/dt has the sign of p_k
+/// (the kinetic energy is diagonal in p with positive coefficients).
+template <class Q, class Scalar>
+void polar_angle_danger(const Q& q, const Q& p, int a, int b, Scalar min_sine, DangerFlags& f) {
+  using std::abs;
+  for (int k = a; k < b; ++k) {
+    Scalar s, c;
+    sin_cos(q[k], s, c);
+    if (abs(s) < min_sine) f.add(abs(s) < min_sine / Scalar(2), s * c * p[k]);
+  }
+}
+
+/// The turn's frame change T = 2 y y^T G / <y, y> - I (G the ambient metric, <y, y> = y^T G y):
+/// T y = y and T w = -w for every w with <y, w> = 0, an isometry of the space that fixes the body
+/// and reverses its tangent space. Its cotangent lift keeps q and negates p.
+template <class Y, class GY, class Frame>
+void half_turn(const Y& y, const GY& g_y, Frame& change) {
+  change = (y * (g_y.transpose() * (typename Y::Scalar(2) / g_y.dot(y)))).eval();
+  change.diagonal().array() -= typename Y::Scalar(1);
 }
 
 }  // namespace detail

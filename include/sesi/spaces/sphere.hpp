@@ -136,15 +136,20 @@ class Sphere {
   }
 
   // ---- re-charting (recharting.hpp, docs/charts.md) ----
-  /// Is q within policy.min_sine of the singular set (sin q_k = 0 for a polar angle k < n-1)?
+  /// What rechart() does with a body at (q, p): the polar angles k < n-1 with |sin q_k| below
+  /// policy.min_sine are its danger zones (DangerFlags::action; deep below min_sine / 2).
   template <class Policy>
-  bool needs_rechart(const Point& q, const Policy& policy) const {
-    using std::abs;
-    using std::sin;
-    for (int k = 0; k + 1 < dim_; ++k) {
-      if (abs(sin(q[k])) < policy.min_sine) return true;
-    }
-    return false;
+  RechartAction rechart_action(const Point& q, const Point& p, const Policy& policy) const {
+    detail::DangerFlags f;
+    detail::polar_angle_danger(q, p, 0, dim_ - 1, policy.min_sine, f);
+    return f.action();
+  }
+  /// The turn's chart change (orthogonal): the half-turn 2 y y^T / |y|^2 - I about y = embed(q).
+  template <class Frame>
+  void turn(const Point& q, Frame& change) const {
+    Ambient y(ambient_dim());
+    embed(q, y);
+    detail::half_turn(y, y, change);
   }
   /// The chart change L (orthogonal) that puts the body at x = R e_1 of the new chart, moving
   /// along e_2: every polar angle pi/2, on the great circle of the last angle, where the chart is
