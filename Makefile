@@ -4,11 +4,12 @@
 BUILD_DIR   ?= build
 RELEASE_DIR ?= build-release
 JOBS        ?= $(shell nproc)
-# clang and its runtimes (libclang-rt) build the sanitizer job of `make test` and `make fuzz`.
+# clang and its runtimes (libclang-rt) build the sanitizer job of `make test` and `make fuzz`;
+# libbenchmark-dev the micro-benchmarks (`make microbench`, and a smoke test in `make test`).
 APT_PACKAGES := cmake g++ make libeigen3-dev libboost-dev doctest-dev libtomlplusplus-dev \
-                libcli11-dev python3-matplotlib clang libclang-rt-14-dev
+                libcli11-dev python3-matplotlib clang libclang-rt-14-dev libbenchmark-dev
 
-.PHONY: deps configure build test demo clean fuzz figures
+.PHONY: deps configure build test demo clean fuzz figures microbench
 
 deps:
 	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
@@ -18,7 +19,7 @@ deps:
 	fi
 
 configure: deps
-	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSESI_WERROR=ON
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSESI_WERROR=ON -DSESI_BUILD_BENCHMARKS=ON
 
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
@@ -32,6 +33,12 @@ demo: deps
 	$(RELEASE_DIR)/src/sesi run --out sesi-out/paper
 	@# Debian's python3-matplotlib belongs to /usr/bin/python3, whatever python3 comes first in PATH.
 	$$(test -x /usr/bin/python3 && echo /usr/bin/python3 || echo python3) tools/plot_run.py sesi-out/paper
+
+# Google Benchmark micro-benchmarks of a step's pieces, Release build; prints ratios at the end.
+microbench: deps
+	cmake -S . -B $(RELEASE_DIR) -DCMAKE_BUILD_TYPE=Release -DSESI_BUILD_TESTS=OFF -DSESI_BUILD_BENCHMARKS=ON
+	cmake --build $(RELEASE_DIR) -j $(JOBS) --target sesi_microbench
+	$(RELEASE_DIR)/bench/sesi_microbench
 
 clean:
 	rm -rf $(BUILD_DIR) $(RELEASE_DIR)
