@@ -64,12 +64,14 @@ struct Recharted {
 /// call gives s identity frames.
 ///
 /// A body moving deeper into a danger zone (near a pole, near or far from the H^n origin) is
-/// turned: its frame F becomes F T, T the half-turn about the body (an isometry fixing it and
-/// reversing its tangent space), so q stays and p changes sign: in the new chart the body moves
-/// back out of the zone it was entering, along the same chart curve reversed, while its world
-/// state is unchanged. Because q stays and p only changes sign, the method's modified energy,
-/// which a symmetric method has even in p, is the same in both charts (for the chart-dependent
-/// kinetic terms), so re-chartings add no drift (docs/charts.md; tests/stability/long.cpp).
+/// turned: its frame F becomes F T, T the half-turn about the body (the geodesic symmetry at
+/// the body's point of the symmetric space S^n or H^n: an isometry fixing it and reversing its
+/// tangent space), so q stays and p changes sign: in the new chart the body moves back out of
+/// the zone it was entering, along the same chart curve reversed, while its world state is
+/// unchanged. The compositions are symmetric and reversible under p -> -p, so their modified
+/// Hamiltonian is even in p (Hairer, Lubich, Wanner, Geometric Numerical Integration, 2nd ed.,
+/// IX.2 and XI.1); its chart-dependent kinetic terms are therefore the same in both charts, and
+/// re-chartings add no drift (docs/charts.md; tests/stability/long.cpp).
 /// A body deep in a zone, or one a turn cannot help, is homed instead (Chart::home).
 template <class Sys>
 Recharted rechart(const Sys& sys, State<typename Sys::Chart>& s,
