@@ -225,10 +225,9 @@ class Hyperbolic {
   /// sinh^2 b, b the closest approach to the chart origin of the geodesic through (q, p): the
   /// angular momentum sinh(q_1) |w| (w the tangential velocity over R) is conserved and equals
   /// sinh(b) |v| there, so sinh^2 b = sinh^2 q_1 (1 - radial share of the speed^2); the speed^2
-  /// is sum_i p_i^2 g^i (g^i the inverse metric), its radial share p_1^2 g^1.
+  /// is sum_i p_i^2 g^i = 2 K at unit mass (g^i the inverse metric), its radial share p_1^2 g^1.
   Scalar closest_approach_sinh2(const Point& q, const Point& p) const {
-    Scalar speed2(0);
-    for (int i = 0; i < dim_; ++i) speed2 += p[i] * p[i] * inverse_metric(i, q);
+    const Scalar speed2 = Scalar(2) * kinetic_energy(*this, q, p, Scalar(1));
     const Scalar sh = std::sinh(q[0]);
     if (!(speed2 > Scalar(0))) return sh * sh;
     const Scalar radial = p[0] * p[0] * inv_r2_;
