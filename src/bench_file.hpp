@@ -22,9 +22,10 @@ Result bench_scene_file(const Scene& scene, const Settings& settings) {
   for (const PotentialSpec& p : scene.potentials)
     external = external || std::holds_alternative<CentralCotangentSpec>(p);
   Harness<std::remove_const_t<decltype(sys)>> h(sys, initial_state<Chart>(scene), settings,
-                                                Eigen::MatrixXd(), /*rechart=*/true);
+                                                Eigen::MatrixXd(), SesiForm::program_recharting);
   Result r;
   r.notes.push_back("scene: " + scene.name + " (" + scene.source + ")");
+  r.notes.push_back("sesi rows: kick-drift-kick form with re-charting, as sesi run steps");
   Eigen::MatrixXd reference;
   if (scene.exact == ExactSolution::paper) {
     const sesi::scenes::paper::Exact exact;

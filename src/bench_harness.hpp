@@ -63,10 +63,11 @@ class Harness {
   static constexpr bool quadric = sesi::reference::QuadricChart<Chart>;
 
   /// @param conserved rows select the conserved components of the momentum map (empty: all).
+  /// @param form which form of the SESI compositions the sesi* rows run (SesiForm).
   Harness(const Sys& sys, StateT x0, Settings settings, Eigen::MatrixXd conserved,
-          bool rechart)
+          SesiForm form)
       : sys_(sys), x0_(std::move(x0)), s_(std::move(settings)),
-        conserved_(std::move(conserved)), rechart_(rechart) {
+        conserved_(std::move(conserved)), form_(form) {
     e0_ = sys_.energy(x0_);
     j0_ = sesi::momentum_map(sys_, x0_);
     for (int j = 0; j <= s_.samples; ++j) times_.push_back(s_.t_end * j / s_.samples);
@@ -289,13 +290,20 @@ class Harness {
   template <class Table, class Obs>
   Outcome composition(double dt, std::span<const double> times, Obs& obs) const {
     StateT x = x0_;
+    auto run = [&](auto&& st) {
+      return long(sesi::reference::integrate_fixed(st, sys_, x, 0.0, s_.t_end, dt, times, obs));
+    };
     long steps = 0;
-    if (rechart_) {
-      sesi::RechartingComposition<Table, Chart> st(sesi::RechartPolicy<double>{});
-      steps = long(sesi::reference::integrate_fixed(st, sys_, x, 0.0, s_.t_end, dt, times, obs));
-    } else {
-      sesi::Composition<Table, Chart> st;
-      steps = long(sesi::reference::integrate_fixed(st, sys_, x, 0.0, s_.t_end, dt, times, obs));
+    switch (form_) {
+      case SesiForm::seed:
+        steps = run(sesi::Composition<Table, Chart>());
+        break;
+      case SesiForm::program:
+        steps = run(sesi::Composition<Table, Chart, sesi::Splitting::kick_drift_kick>());
+        break;
+      case SesiForm::program_recharting:
+        steps = run(sesi::RechartingComposition<Table, Chart>(sesi::RechartPolicy<double>{}));
+        break;
     }
     return {sesi::embedding_points(sys_, x), steps, steps * long(Table::stages)};
   }
@@ -324,7 +332,7 @@ class Harness {
   StateT x0_;
   Settings s_;
   Eigen::MatrixXd conserved_;
-  bool rechart_;
+  SesiForm form_;
   double e0_ = 0;
   Eigen::VectorXd j0_;
   std::vector<double> times_;

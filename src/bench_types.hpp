@@ -43,6 +43,13 @@ struct Row {
   double max_momentum_drift = 0;
 };
 
+/// Which form of the base step the sesi* rows run (sesi/stepper.hpp, docs/scheme.md).
+enum class SesiForm {
+  seed,                ///< drift-kick-drift, the seed's form, the library default; no re-charting
+  program,             ///< kick-drift-kick, as `sesi run` steps; no re-charting
+  program_recharting,  ///< kick-drift-kick with re-charting: exactly what `sesi run` does
+};
+
 struct Settings {
   double t_end = 0;         ///< length of every run
   int samples = 1000;       ///< common observation times: t_end * j / samples, j = 0..samples

@@ -1,73 +1,72 @@
 #pragma once
 /// @file terms.hpp
-/// The potential terms of a scene at run time, as two term types of the library's System:
-/// one pair aggregate and one external aggregate, each a list of std::variant of the built-in
-/// terms. So a (space, dimension) has one System type whatever the scene's combination of
-/// potentials, and the program instantiates no space x dimension x potential combinations.
+/// The potential terms of a scene at run time, as three term types of the library's System: a
+/// chord pair aggregate, a geodesic pair aggregate and an external aggregate, each a list of the
+/// built-in terms. So a (space, dimension) has one System type whatever the scene's combination
+/// of potentials, and the program instantiates no space x dimension x potential combinations.
+/// An empty aggregate costs nothing: the System skips a term whose empty() is true.
 ///
-/// The pair aggregate works on the geodesic distance d. The chord-well term (a function of the
-/// chord) gets the chord of d, c = 2 sn(d/2) (2R sin(d/2R) on S^n, the Euclidean chord;
-/// 2R sinh(d/2R) on H^n, the Minkowski chord, invariant under the isometries; d on E^n), with
-/// dc/dd = cs(d/2) (sesi::special::sn, cs).
+/// The chord aggregate (the seed's chord well) gets the chord in the ambient metric from the
+/// System (|x_i - x_j| on S^n and E^n, the Minkowski chord 2R sinh(d/2R) on H^n): no arc
+/// function per pair. The geodesic aggregate gets the geodesic distance d.
 
 #include <variant>
 #include <vector>
 
 #include <sesi/potentials.hpp>
-#include <sesi/special_functions.hpp>
 #include <sesi/system.hpp>
 
 #include "scene.hpp"
 
 namespace sesi::program {
 
-/// All pair terms of a scene: W(d) = sum of the terms' W, over unordered pairs.
+/// The pair terms of a scene that are functions of the chord c: W(c) = sum of the terms' W.
+template <class Chart>
+class ChordPairTerms {
+ public:
+  using distance_kind = sesi::chord_distance;
+  using Term = sesi::ChordWell<double>;
+
+  void add(Term term) { terms_.push_back(std::move(term)); }
+  bool empty() const { return terms_.empty(); }
+
+  double value(const Chart& space, double c, double mi, double mj) const {
+    double w = 0.0;
+    for (const Term& t : terms_) w += t.value(space, c, mi, mj);
+    return w;
+  }
+  double derivative(const Chart& space, double c, double mi, double mj) const {
+    double dw = 0.0;
+    for (const Term& t : terms_) dw += t.derivative(space, c, mi, mj);
+    return dw;
+  }
+
+ private:
+  std::vector<Term> terms_;
+};
+
+/// The pair terms of a scene that are functions of the geodesic distance d: W(d) = sum of W.
 template <class Chart>
 class PairTerms {
  public:
   using distance_kind = sesi::geodesic_distance;
-  using Term = std::variant<sesi::ChordWell<double>, sesi::CotangentGravity<double>,
-                            sesi::HarmonicPair<double>, sesi::LennardJones<double>>;
+  using Term = std::variant<sesi::CotangentGravity<double>, sesi::HarmonicPair<double>,
+                            sesi::LennardJones<double>>;
 
   void add(Term term) { terms_.push_back(std::move(term)); }
   bool empty() const { return terms_.empty(); }
 
   double value(const Chart& space, double d, double mi, double mj) const {
     double w = 0.0;
-    for (const Term& term : terms_) {
-      w += std::visit(
-          [&](const auto& t) {
-            if constexpr (sesi::is_chord_term<std::decay_t<decltype(t)>>) {
-              return t.value(space, chord(space, d), mi, mj);
-            } else {
-              return t.value(space, d, mi, mj);
-            }
-          },
-          term);
-    }
+    for (const Term& term : terms_)
+      w += std::visit([&](const auto& t) { return t.value(space, d, mi, mj); }, term);
     return w;
   }
-
   double derivative(const Chart& space, double d, double mi, double mj) const {
     double dw = 0.0;
-    for (const Term& term : terms_) {
-      dw += std::visit(
-          [&](const auto& t) {
-            if constexpr (sesi::is_chord_term<std::decay_t<decltype(t)>>) {
-              return t.derivative(space, chord(space, d), mi, mj) *
-                     sesi::special::cs(space.curvature(), d / 2);
-            } else {
-              return t.derivative(space, d, mi, mj);
-            }
-          },
-          term);
-    }
+    for (const Term& term : terms_)
+      dw += std::visit([&](const auto& t) { return t.derivative(space, d, mi, mj); }, term);
     return dw;
-  }
-
-  /// The chord of a geodesic distance d: 2 sn(d/2).
-  static double chord(const Chart& space, double d) {
-    return 2.0 * sesi::special::sn(space.curvature(), d / 2);
   }
 
  private:
@@ -107,10 +106,11 @@ class ExternalTerms {
 
 /// The scene's potentials, sorted into the two aggregates.
 template <class Chart>
-void add_terms(const Scene& scene, PairTerms<Chart>& pairs, ExternalTerms<Chart>& externals) {
+void add_terms(const Scene& scene, ChordPairTerms<Chart>& chords, PairTerms<Chart>& pairs,
+               ExternalTerms<Chart>& externals) {
   for (const PotentialSpec& spec : scene.potentials) {
     if (const auto* s = std::get_if<ChordWellSpec>(&spec)) {
-      pairs.add(sesi::ChordWell<double>(s->theta0, s->strength));
+      chords.add(sesi::ChordWell<double>(s->theta0, s->strength));
     } else if (const auto* s = std::get_if<CotangentGravitySpec>(&spec)) {
       pairs.add(sesi::CotangentGravity<double>{s->G});
     } else if (const auto* s = std::get_if<HarmonicPairSpec>(&spec)) {
@@ -126,19 +126,21 @@ void add_terms(const Scene& scene, PairTerms<Chart>& pairs, ExternalTerms<Chart>
   }
 }
 
-/// The one system type of a chart: masses, a pair aggregate and an external aggregate.
+/// The one system type of a chart: masses, two pair aggregates and an external aggregate.
 template <class Chart>
-using SystemOf = sesi::System<Chart, PairTerms<Chart>, ExternalTerms<Chart>>;
+using SystemOf = sesi::System<Chart, ChordPairTerms<Chart>, PairTerms<Chart>, ExternalTerms<Chart>>;
 
 /// The scene's system on chart.
 template <class Chart>
 SystemOf<Chart> make_system(const Scene& scene, const Chart& chart) {
+  ChordPairTerms<Chart> chords;
   PairTerms<Chart> pairs;
   ExternalTerms<Chart> externals;
-  add_terms(scene, pairs, externals);
+  add_terms(scene, chords, pairs, externals);
   std::vector<double> masses;
   for (const Body& b : scene.bodies) masses.push_back(b.mass);
-  return SystemOf<Chart>(chart, std::move(masses), std::move(pairs), std::move(externals));
+  return SystemOf<Chart>(chart, std::move(masses), std::move(chords), std::move(pairs),
+                         std::move(externals));
 }
 
 }  // namespace sesi::program

@@ -5,6 +5,8 @@
 /// Only what the system has is compiled into its step: without terms there is no kick at all,
 /// and a pair loop exists only for pair terms.
 
+#include <cmath>
+#include <concepts>
 #include <tuple>
 #include <type_traits>
 #include <utility>
@@ -79,6 +81,24 @@ struct Workspace : TrigStore<Chart> {
     }
   }
 };
+
+namespace detail {
+/// v -> G v with G the ambient metric: the chart's `lower(v)` where it has one (H^n: eta v, the
+/// Minkowski metric), else nothing (the Euclidean ambient of S^n and E^n).
+template <class Chart, class V>
+void lower_index(const Chart& chart, V& v) {
+  if constexpr (requires { chart.lower(v); }) chart.lower(v);
+}
+/// The chord of a pair in the ambient metric from u = x - y and lowered = G u: sqrt(<u, u>).
+/// |x - y| on S^n and E^n; sqrt(<u, u>_L) = 2R sinh(d/2R) on H^n, where the Euclidean norm would
+/// not be invariant under the isometries. Round-off negatives clamp to 0 (a NaN stays NaN).
+template <class U, class L>
+auto ambient_chord(const U& u, const L& lowered) {
+  using std::sqrt;
+  const auto c2 = u.dot(lowered);
+  return sqrt(c2 < decltype(c2)(0) ? decltype(c2)(0) : c2);
+}
+}  // namespace detail
 
 template <HierarchicalChart Chart_, class... Terms>
 class System {
@@ -257,15 +277,34 @@ class System {
     }
   }
 
+  /// A term with empty() (an aggregate of run-time terms, say) is skipped while it is empty.
+  template <class Term>
+  static bool inactive(const Term& term) {
+    if constexpr (requires { { term.empty() } -> std::convertible_to<bool>; }) {
+      return term.empty();
+    } else {
+      return false;
+    }
+  }
+
   template <class Term>
   Scalar term_energy(const Term& term, Workspace& w) const {
     Scalar v(0);
+    if (inactive(term)) return v;
     if constexpr (PairTerm<Term, Chart>) {
       for (int i = 0; i < bodies(); ++i) {
         w.x = w.X.col(i);
         for (int j = i + 1; j < bodies(); ++j) {
           w.y = w.X.col(j);
-          const Scalar d = is_chord_term<Term> ? (w.x - w.y).norm() : chart_.distance(w.x, w.y);
+          Scalar d;
+          if constexpr (is_chord_term<Term>) {
+            w.g = w.x - w.y;
+            w.gy = w.g;
+            detail::lower_index(chart_, w.gy);
+            d = detail::ambient_chord(w.g, w.gy);
+          } else {
+            d = chart_.distance(w.x, w.y);
+          }
           v += term.value(chart_, d, mass(i), mass(j));
         }
       }
@@ -281,17 +320,21 @@ class System {
 
   template <class Term>
   void add_term_gradient(const Term& term, Workspace& w) const {
+    if (inactive(term)) return;
     if constexpr (PairTerm<Term, Chart>) {
       for (int i = 0; i < bodies(); ++i) {
         w.x = w.X.col(i);
         for (int j = i + 1; j < bodies(); ++j) {
           w.y = w.X.col(j);
           if constexpr (is_chord_term<Term>) {
+            // d chord / dx = G (x - y) / chord, and the opposite in y.
             w.g = w.x - w.y;
-            const Scalar d = w.g.norm();
-            w.g *= term.derivative(chart_, d, mass(i), mass(j)) / d;
-            w.G.col(i) += w.g;
-            w.G.col(j) -= w.g;
+            w.gy = w.g;
+            detail::lower_index(chart_, w.gy);
+            const Scalar d = detail::ambient_chord(w.g, w.gy);
+            w.gy *= term.derivative(chart_, d, mass(i), mass(j)) / d;
+            w.G.col(i) += w.gy;
+            w.G.col(j) -= w.gy;
           } else if constexpr (requires { chart_.distance_gradients(w.x, w.y, w.g, w.g); }) {
             const Scalar d = chart_.distance_gradients(w.x, w.y, w.g, w.gy);
             const Scalar dw = term.derivative(chart_, d, mass(i), mass(j));

@@ -234,3 +234,60 @@ TEST_CASE_TEMPLATE_DEFINE("maps: the momentum map under a rotation-invariant pai
 TEST_CASE_TEMPLATE_APPLY(maps_momentum,
                          std::tuple<sesi::Sphere<1>, sesi::Sphere<2>, sesi::Sphere<5>,
                                     sesi::Hyperbolic<1>, sesi::Hyperbolic<3>, sesi::Euclidean<3>>);
+
+TEST_CASE_TEMPLATE_DEFINE("maps: a chord term sees the chord of the ambient metric", Chart,
+                          maps_chord) {
+  // W(c) = c^3 / 3 of the chord c: on S^n and E^n the Euclidean |x - y|, on H^n the Minkowski
+  // chord 2R sinh(d/2R) (system.hpp, ambient_chord; a Euclidean norm there would not be
+  // invariant under the boosts). Energy against the chord of the textbook distance in long
+  // double; gradient against central differences of the energy in long double.
+  using Scalar = typename Chart::Scalar;
+  const Chart chart = make_chart<Chart>();
+  const int n = chart.dim();
+  auto cube = [](auto c, auto, auto) { return c * c * c / 3; };
+  auto square = [](auto c, auto, auto) { return c * c; };
+  const auto sys = sesi::System(chart, std::vector<Scalar>{1, 1},
+                                sesi::make_pair<sesi::chord_distance>(cube, square));
+  using RChart = rebind_t<Chart, Real>;
+  const RChart rchart = make_chart<RChart>();
+  const auto rsys = sesi::System(rchart, std::vector<Real>{1, 1},
+                                 sesi::make_pair<sesi::chord_distance>(cube, square));
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 10; ++trial) {
+    const auto st = random_state(sys, rng);
+    sesi::State<RChart> rst(n, 2);
+    rst.q = st.q.template cast<Real>();
+    rst.p = st.p.template cast<Real>();
+    const auto X = sesi::embedding_points(rsys, rst);
+    Real r = 1, c;
+    if constexpr (!is_euclidean<Chart>) r = chart.radius();
+    if constexpr (is_sphere<Chart>) {
+      c = 2 * r * std::sin(r * std::acos(X.col(0).dot(X.col(1)) / (r * r)) / (2 * r));
+    } else if constexpr (is_hyperbolic<Chart>) {
+      c = 2 * r * std::sinh(r * std::acosh(-sesi::minkowski(X.col(0), X.col(1)) / (r * r)) / (2 * r));
+    } else {
+      c = (X.col(0) - X.col(1)).norm();
+    }
+    // Round-off of the points (a few (n + 3) eps R) and of the chord: 3 c^2 of that in W.
+    const double v = static_cast<double>(sys.potential_energy(st));
+    const double vref = static_cast<double>(c * c * c / 3);
+    CHECK(std::abs(v - vref) <= 16 * (n + 3) * 2.2e-16 * static_cast<double>(c * c * (r + c)));
+
+    typename sesi::State<Chart>::Matrix grad;
+    auto w = sys.make_workspace();
+    sys.potential_gradient(st, w, grad);
+    // Central differences in long double, step 2^-20: truncation ~ 1e-12 |V'''|, V''' = O(1).
+    const Real delta = std::ldexp(Real(1), -20);
+    for (int b = 0; b < 2; ++b) {
+      for (int k = 0; k < n; ++k) {
+        sesi::State<RChart> sp = rst, sm = rst;
+        sp.q(k, b) += delta;
+        sm.q(k, b) -= delta;
+        const Real fd = (rsys.potential_energy(sp) - rsys.potential_energy(sm)) / (2 * delta);
+        CHECK(std::abs(static_cast<double>(grad(k, b)) - static_cast<double>(fd)) <= 1e-9);
+      }
+    }
+  }
+}
+TEST_CASE_TEMPLATE_APPLY(maps_chord, std::tuple<sesi::Sphere<2>, sesi::Sphere<4>, sesi::Hyperbolic<2>,
+                                                sesi::Hyperbolic<4>, sesi::Euclidean<3>>);

@@ -298,6 +298,9 @@ class Hyperbolic {
   Scalar tangency(const Ambient& x, const Ambient& v) const { return minkowski(x, v); }
   /// Inner product of tangent vectors (Minkowski, positive on tangent vectors).
   Scalar inner(const Ambient& u, const Ambient& v) const { return minkowski(u, v); }
+  /// v -> eta v, the Minkowski metric applied to v (index lowering: <u, v>_L = u . eta v). The
+  /// System uses it for chord terms: the gradient of sqrt(<u, u>_L) in u is eta u / chord.
+  void lower(Ambient& v) const { v[dim_] = -v[dim_]; }
 
   /// Geodesic distance R acosh(-<x,y>/R^2), as 2 R asinh(|x - y|_L / 2R): accurate when small.
   Scalar distance(const Ambient& x, const Ambient& y) const {
