@@ -82,24 +82,6 @@ struct Workspace : TrigStore<Chart> {
   }
 };
 
-namespace detail {
-/// v -> G v with G the ambient metric: the chart's `lower(v)` where it has one (H^n: eta v, the
-/// Minkowski metric), else nothing (the Euclidean ambient of S^n and E^n).
-template <class Chart, class V>
-void lower_index(const Chart& chart, V& v) {
-  if constexpr (requires { chart.lower(v); }) chart.lower(v);
-}
-/// The chord of a pair in the ambient metric from u = x - y and lowered = G u: sqrt(<u, u>).
-/// |x - y| on S^n and E^n; sqrt(<u, u>_L) = 2R sinh(d/2R) on H^n, where the Euclidean norm would
-/// not be invariant under the isometries. Round-off negatives clamp to 0 (a NaN stays NaN).
-template <class U, class L>
-auto ambient_chord(const U& u, const L& lowered) {
-  using std::sqrt;
-  const auto c2 = u.dot(lowered);
-  return sqrt(c2 < decltype(c2)(0) ? decltype(c2)(0) : c2);
-}
-}  // namespace detail
-
 template <HierarchicalChart Chart_, class... Terms>
 class System {
  public:
@@ -277,6 +259,18 @@ class System {
     }
   }
 
+  /// The chord of the pair w.x, w.y in the ambient metric G, sqrt(<u, u>) with u = x - y, leaving
+  /// G u in w.gy: |x - y| on S^n and E^n; on H^n (the chart's lower(v): v -> eta v) the Minkowski
+  /// chord 2R sinh(d/2R), since a Euclidean norm would not be invariant under the boosts.
+  /// Round-off negatives clamp to 0 (a NaN stays NaN).
+  Scalar chord(Workspace& w) const {
+    using std::sqrt;
+    w.gy = w.x - w.y;
+    if constexpr (requires { chart_.lower(w.gy); }) chart_.lower(w.gy);
+    const Scalar c2 = (w.x - w.y).dot(w.gy);
+    return sqrt(c2 < Scalar(0) ? Scalar(0) : c2);
+  }
+
   /// A term with empty() (an aggregate of run-time terms, say) is skipped while it is empty.
   template <class Term>
   static bool inactive(const Term& term) {
@@ -296,15 +290,7 @@ class System {
         w.x = w.X.col(i);
         for (int j = i + 1; j < bodies(); ++j) {
           w.y = w.X.col(j);
-          Scalar d;
-          if constexpr (is_chord_term<Term>) {
-            w.g = w.x - w.y;
-            w.gy = w.g;
-            detail::lower_index(chart_, w.gy);
-            d = detail::ambient_chord(w.g, w.gy);
-          } else {
-            d = chart_.distance(w.x, w.y);
-          }
+          const Scalar d = is_chord_term<Term> ? chord(w) : chart_.distance(w.x, w.y);
           v += term.value(chart_, d, mass(i), mass(j));
         }
       }
@@ -328,10 +314,7 @@ class System {
           w.y = w.X.col(j);
           if constexpr (is_chord_term<Term>) {
             // d chord / dx = G (x - y) / chord, and the opposite in y.
-            w.g = w.x - w.y;
-            w.gy = w.g;
-            detail::lower_index(chart_, w.gy);
-            const Scalar d = detail::ambient_chord(w.g, w.gy);
+            const Scalar d = chord(w);
             w.gy *= term.derivative(chart_, d, mass(i), mass(j)) / d;
             w.G.col(i) += w.gy;
             w.G.col(j) -= w.gy;
