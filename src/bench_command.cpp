@@ -101,6 +101,11 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
   b->add_flag("--quick", o.quick, "A short sweep (t_end <= 20, 200 samples, 2-3 points per method; for tests).");
   b->add_option("--repeats", o.repeats, "Timed repeats per point (minimum reported).")
       ->type_name("N");
+  b->add_option("--form", o.form,
+                "Form of the sesi* rows: program (kick-drift-kick, as sesi run; re-charting on a "
+                "scene file) or seed (drift-kick-drift, the library default). Default: program "
+                "on paper and scene files, seed on the Kepler scenes.")
+      ->type_name("FORM");
   b->add_option("--figure", o.figure,
                 "Instead of the sweep, the data of a seed figure: seed-fig1 or convergence.")
       ->type_name("NAME");
@@ -173,6 +178,13 @@ int bench_command(const BenchOptions& o) {
   s.run_budget = o.quick ? 2.0 : 20.0;
   s.samples = o.quick ? 200 : 1000;
   s.methods = parse_methods(o.methods);
+  if (o.form == "seed") {
+    s.form = bench::SesiForm::seed;
+  } else if (o.form == "program") {
+    s.form = bench::SesiForm::program;
+  } else if (!o.form.empty()) {
+    throw InputError("--form: seed or program, not '" + o.form + "'");
+  }
   if (o.t_end < 0 || !std::isfinite(o.t_end)) throw InputError("--t-end: must be > 0");
 
   const bool builtin = o.scene == "paper" || o.scene == "kepler-s2" || o.scene == "kepler-h2";

@@ -19,6 +19,7 @@ struct BenchOptions {
   bool quick = false;
   int repeats = 0;              ///< 0: 3 (1 with --quick)
   std::string figure;           ///< seed-fig1 | convergence (data of the seed's figures)
+  std::string form;             ///< seed | program (empty: the scene's, docs/benchmarks.md)
 };
 
 /// Add the `bench` subcommand to app, parsing into options.

@@ -21,11 +21,13 @@ Result bench_scene_file(const Scene& scene, const Settings& settings) {
   bool external = false;
   for (const PotentialSpec& p : scene.potentials)
     external = external || std::holds_alternative<CentralCotangentSpec>(p);
+  // As `sesi run` steps (with re-charting), unless --form seed asks for the library's default.
+  const SesiForm form = settings.form == SesiForm::seed ? SesiForm::seed : SesiForm::program_recharting;
   Harness<std::remove_const_t<decltype(sys)>> h(sys, initial_state<Chart>(scene), settings,
-                                                Eigen::MatrixXd(), SesiForm::program_recharting);
+                                                Eigen::MatrixXd(), form);
   Result r;
   r.notes.push_back("scene: " + scene.name + " (" + scene.source + ")");
-  r.notes.push_back("sesi rows: kick-drift-kick form with re-charting, as sesi run steps");
+  r.notes.push_back(describe(form));
   Eigen::MatrixXd reference;
   if (scene.exact == ExactSolution::paper) {
     const sesi::scenes::paper::Exact exact;

@@ -3,6 +3,7 @@
 /// `sesi bench` (issue #4): the methods it compares, its settings and one CSV row per run.
 /// Compiled once (bench_command.cpp); the templated harness is bench_harness.hpp.
 
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -50,12 +51,26 @@ enum class SesiForm {
   program_recharting,  ///< kick-drift-kick with re-charting: exactly what `sesi run` does
 };
 
+/// The CSV's `# sesi rows:` note for a form.
+inline const char* describe(SesiForm f) {
+  switch (f) {
+    case SesiForm::seed: return "sesi rows: drift-kick-drift form (the seed's), no re-charting";
+    case SesiForm::program: return "sesi rows: kick-drift-kick form, as sesi run steps, no re-charting";
+    case SesiForm::program_recharting:
+      return "sesi rows: kick-drift-kick form with re-charting, as sesi run steps";
+  }
+  return "";
+}
+
 struct Settings {
   double t_end = 0;         ///< length of every run
   int samples = 1000;       ///< common observation times: t_end * j / samples, j = 0..samples
   int repeats = 3;          ///< timed repeats (the minimum is reported)
   bool quick = false;       ///< a short sweep (ctest)
   double run_budget = 20;   ///< seconds: a sweep stops refining after a run this long
+  /// --form: the form of the sesi* rows (program: with re-charting on scene files); none: the
+  /// scene's own choice.
+  std::optional<SesiForm> form;
   std::vector<const MethodSpec*> methods;
 };
 

@@ -2,7 +2,9 @@
 """Runs `sesi bench --quick` on one scene and checks work_precision.csv (issue #4):
 the header and columns, one or more rows per method (all methods of the scene), finite
 non-negative numbers, steps and force evaluations growing as the step (tolerance) falls, and
-every method's final error falling from its coarsest to its finest run."""
+every method's final error falling from its coarsest to its finest run; the form the sesi rows
+ran in (`# sesi rows:`, the scene's default or --form); and that a bad --form is refused with
+exit status 2, one line, and nothing written."""
 import argparse
 import csv
 import math
@@ -25,27 +27,46 @@ def main():
     ap.add_argument("--source", required=True)
     ap.add_argument("--work", required=True)
     ap.add_argument("--scene", required=True)
+    ap.add_argument("--form", default="")
     a = ap.parse_args()
-    out = os.path.join(a.work, a.scene)
+    out = os.path.join(a.work, a.scene + (f"-{a.form}" if a.form else ""))
     shutil.rmtree(out, ignore_errors=True)
     scene = a.scene
     if scene == "file":
         scene = os.path.join(a.source, "examples", "scenes", "paper.toml")
+    failures = []
+    # A bad --form: exit status 2, one line naming the option, no output directory.
+    bad_out = out + "-bad-form"
+    shutil.rmtree(bad_out, ignore_errors=True)
+    bad = subprocess.run([a.sesi, "bench", "--quick", "--scene", scene, "--form", "kdk",
+                          "--out", bad_out], capture_output=True, text=True, timeout=55)
+    if bad.returncode != 2 or len(bad.stderr.strip().splitlines()) != 1 or \
+            "--form" not in bad.stderr or os.path.exists(bad_out):
+        failures.append(f"--form kdk: exit {bad.returncode}, stderr {bad.stderr!r}, "
+                        f"output written: {os.path.exists(bad_out)}")
+    # The form of the sesi rows: the scene's default, or --form (re-charting on a scene file).
+    form = a.form or ("seed" if a.scene.startswith("kepler") else "program")
+    expected = {"seed": "drift-kick-drift form (the seed's), no re-charting",
+                "program": ("kick-drift-kick form with re-charting" if a.scene == "file"
+                            else "kick-drift-kick form, as sesi run steps, no re-charting")}[form]
     start = time.monotonic()
-    run = subprocess.run([a.sesi, "bench", "--quick", "--scene", scene, "--out", out],
-                         capture_output=True, text=True, timeout=55)
+    command = [a.sesi, "bench", "--quick", "--scene", scene, "--out", out]
+    if a.form:
+        command += ["--form", a.form]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=55)
     elapsed = time.monotonic() - start
     sys.stderr.write(run.stderr)
     if run.returncode != 0:
         print(f"FAIL: exit status {run.returncode}")
         return 1
-    failures = []
     with open(os.path.join(out, "work_precision.csv")) as f:
         lines = f.read().splitlines()
     notes = [l for l in lines if l.startswith("#")]
     body = [l for l in lines if not l.startswith("#")]
     if not any(n.startswith("# reference: ") for n in notes):
         failures.append("no '# reference:' comment line")
+    if not any(n.startswith("# sesi rows: ") and expected in n for n in notes):
+        failures.append(f"no '# sesi rows:' line saying {expected!r}")
     if body[0].split(",") != COLUMNS:
         failures.append(f"header {body[0]!r}")
     rows = list(csv.DictReader(body))
