@@ -1,10 +1,12 @@
 #pragma once
 /// @file chart_integrator.hpp
-/// The Integrator of one compile-time chart: what each (space, dimension) instantiates, and
-/// nothing more (the system's kick and one composition engine; diagnostics are computed once
-/// per space, observables.hpp).
+/// The Integrator of one compile-time chart: what each (space, dimension) instantiates: the
+/// system, one composition engine, and the diagnostics of the framed state.
 
 #include <memory>
+
+#include <sesi/diagnostics.hpp>
+#include <sesi/recharting.hpp>
 
 #include <sesi/spaces/euclidean.hpp>
 #include <sesi/spaces/hyperbolic.hpp>
@@ -48,6 +50,31 @@ class ChartIntegrator final : public Integrator {
   ChartIntegrator& operator=(const ChartIntegrator&) = delete;
 
   void step(double t, double h) override { stepper_->step(x_, t, h); }
+
+  int first_non_finite_body() const override {
+    for (int b = 0; b < x_.bodies(); ++b) {
+      if (!x_.q.col(b).allFinite() || !x_.p.col(b).allFinite()) return b + 1;
+    }
+    return 0;
+  }
+  double energy() override { return sys_.energy(x_, w_); }
+  Eigen::VectorXd momentum_map() override { return sesi::momentum_map(sys_, x_); }
+  Eigen::MatrixXd points() override { return sesi::embedding_points(sys_, x_); }
+  Eigen::MatrixXd velocities() override { return sesi::embedding_velocities(sys_, x_); }
+  int body_with_non_finite_energy() override {
+    typename Chart::Point q(sys_.dim()), p(sys_.dim());
+    for (int b = 0; b < sys_.bodies(); ++b) {
+      q = x_.q.col(b);
+      p = x_.p.col(b);
+      if (!std::isfinite(sesi::kinetic_energy(sys_.chart(), q, p, sys_.mass(b)))) return b + 1;
+    }
+    typename SystemOf<Chart>::StateType::Matrix gradient;
+    sys_.potential_gradient(x_, w_, gradient);
+    for (int b = 0; b < sys_.bodies(); ++b) {
+      if (!gradient.col(b).allFinite()) return b + 1;
+    }
+    return 0;
+  }
   /// In the scene's own chart: bodies re-charted by the stepper are mapped back (q and p of
   /// the outputs and of summary.json always mean the same coordinates).
   void read(Eigen::MatrixXd& q, Eigen::MatrixXd& p) const override {
@@ -65,6 +92,7 @@ class ChartIntegrator final : public Integrator {
   SystemOf<Chart> sys_;
   sesi::State<Chart> x_;
   std::unique_ptr<AnyStepper<SystemOf<Chart>>> stepper_;  // refers to sys_
+  typename SystemOf<Chart>::Workspace w_ = sys_.make_workspace();  // the diagnostics' own
 };
 
 /// The integrator on Space<N> for the N in Dims equal to scene.dim(), or nullptr.

@@ -1,5 +1,9 @@
 #include "geometry.hpp"
 
+#include <type_traits>
+
+#include <sesi/neighbours.hpp>
+
 #include <cmath>
 #include <numbers>
 
@@ -80,6 +84,39 @@ double Geometry::kinetic_energy(const Vector& q, const Vector& p, double m) cons
 
 double Geometry::distance(const Vector& x, const Vector& y) const {
   return std::visit([&](const auto& chart) { return chart.distance(x, y); }, chart_);
+}
+
+std::vector<std::pair<int, int>> Geometry::close_pairs(const Eigen::MatrixXd& X, double reach, bool antipodal) const {
+  std::vector<std::pair<int, int>> out;
+  const int n = static_cast<int>(X.cols());
+  if (n < 2 && !antipodal) return out;
+  std::visit(
+      [&](const auto& chart) {
+        using Chart = std::remove_cvref_t<decltype(chart)>;
+        sesi::NeighbourIndex<Chart> index;
+        sesi::NeighbourLists lists;
+        if (!antipodal) {
+          index.build(chart, X, reach, lists);
+          for (int i = 0; i < n; ++i) {
+            for (int k = lists.begin(i); k < lists.end(i); ++k) {
+              if (lists.index[static_cast<std::size_t>(k)] > i) out.emplace_back(i, lists.index[static_cast<std::size_t>(k)]);
+            }
+          }
+          return;
+        }
+        // Body j near the antipode of body i is near -x_j: search the points and their negatives.
+        Eigen::MatrixXd both(X.rows(), 2 * n);
+        both << X, -X;
+        index.build(chart, both, reach, lists);
+        for (int i = 0; i < n; ++i) {
+          for (int k = lists.begin(i); k < lists.end(i); ++k) {
+            const int j = lists.index[static_cast<std::size_t>(k)] - n;
+            if (j > i) out.emplace_back(i, j);
+          }
+        }
+      },
+      chart_);
+  return out;
 }
 
 std::optional<std::pair<int, std::string>> Geometry::outside_domain(const Vector& q) const {

@@ -7,7 +7,9 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <variant>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -47,6 +49,11 @@ class Geometry {
   Vector velocity(const Vector& q, const Vector& p, double m) const;
   double kinetic_energy(const Vector& q, const Vector& p, double m) const;
   double distance(const Vector& x, const Vector& y) const;
+
+  /// The pairs (i, j), i < j, of columns of X (embedding points) at distance < reach, in
+  /// O(N log N) through the library's neighbour index; with antipodal (S^n only), the pairs
+  /// whose distance is > pi R - reach instead (within reach of each other's antipode).
+  std::vector<std::pair<int, int>> close_pairs(const Eigen::MatrixXd& X, double reach, bool antipodal = false) const;
 
   /// The first chart coordinate of q outside the chart's domain (0-based), with the domain
   /// ("[0, pi]", ">= 0"), or nothing. S^n: q_1..q_{n-1} in [0, pi]; H^n, n >= 2: q_1 >= 0,

@@ -17,8 +17,23 @@ class Integrator {
   virtual ~Integrator() = default;
   /// Advance the state from t by h (h may be negative).
   virtual void step(double t, double h) = 0;
-  /// The current chart coordinates and momenta (dim x bodies).
+  /// The current chart coordinates and momenta (dim x bodies), in the scene's chart.
   virtual void read(Eigen::MatrixXd& q, Eigen::MatrixXd& p) const = 0;
+
+  // Diagnostics of the current state, computed on the state as it is stepped: each body in its
+  // own chart frame, never through the scene's chart (whose coordinates of a body far out on H^n
+  // would cancel terms of size e^{2r}). Threads as the forces; the same result for any count.
+
+  /// The first body (1-based) whose coordinates or momenta are not finite, or 0.
+  virtual int first_non_finite_body() const = 0;
+  virtual double energy() = 0;
+  virtual Eigen::VectorXd momentum_map() = 0;
+  /// Embedding points and velocities in world coordinates (ambient x bodies).
+  virtual Eigen::MatrixXd points() = 0;
+  virtual Eigen::MatrixXd velocities() = 0;
+  /// With a non-finite energy: the first body (1-based) whose kinetic energy or potential
+  /// gradient is not finite, or 0.
+  virtual int body_with_non_finite_energy() = 0;
 };
 
 /// The integrator of scene (its space, dimension, bodies, potentials and method), at the

@@ -30,7 +30,8 @@ std::string run_footer() {
       "  [[potential]]  kind = \"chord-well\" (theta0, strength), \"cotangent-gravity\" (G),\n"
       "                 \"central-cotangent\" (k, center), \"harmonic-pair\" (k, d0),\n"
       "                 \"lennard-jones\" (epsilon, sigma, cutoff); singular terms also min_distance\n"
-      "  [integrator]   method, dt, t_end, output_every, energy_guard\n"
+      "  [integrator]   method, dt, t_end, output_every, energy_guard, threads, check_every,\n"
+      "                 trajectory_format\n"
       "  Without SCENE: the seed paper's three bodies on S^2 with sesi4, dt = 0.1, t_end = 800.\n"
       "\nOUTPUTS (in DIR, replaced as a whole when the run ends):\n"
       "  trajectory.csv   t, then per body b: b<b>_q<i>, b<b>_p<i>, b<b>_x<i>\n"
@@ -63,7 +64,8 @@ int main(int argc, char** argv) {
   RunOptions options;
   std::string method;
   double dt = 0.0, t_end = 0.0;
-  long output_every = 0;
+  long output_every = 0, threads = 0, check_every = 0;
+  std::string trajectory_format;
   CLI::App* run = app.add_subcommand("run", "Run a scene and write its trajectory, diagnostics and summary.");
   run->add_option("SCENE", options.scene_path,
                   "Scene file (TOML). Without it, the seed paper's three-body scene.")
@@ -80,6 +82,14 @@ int main(int argc, char** argv) {
                         ->type_name("T");
   auto* every_opt =
       run->add_option("--output-every", output_every, "Steps between output rows, >= 1.")->type_name("N");
+  auto* threads_opt =
+      run->add_option("--threads,-j", threads, "Threads, >= 0 (0: all cores; results do not depend on it).")
+          ->type_name("N");
+  auto* check_opt = run->add_option("--check-every", check_every,
+                                    "Steps between energy and encounter checks, >= 1 (output rows are always checked).")
+                        ->type_name("N");
+  auto* format_opt =
+      run->add_option("--trajectory-format", trajectory_format, "Trajectory format: csv or h5md.")->type_name("F");
   run->add_flag("--quiet,-q", options.quiet, "No report on stdout and no progress bar.");
   run->footer(run_footer());
   BenchOptions bench_options;
@@ -96,6 +106,9 @@ int main(int argc, char** argv) {
   if (dt_opt->count() > 0) options.dt = dt;
   if (t_end_opt->count() > 0) options.t_end = t_end;
   if (every_opt->count() > 0) options.output_every = output_every;
+  if (threads_opt->count() > 0) options.threads = threads;
+  if (check_opt->count() > 0) options.check_every = check_every;
+  if (format_opt->count() > 0) options.trajectory_format = trajectory_format;
 
   try {
     if (bench->parsed()) return bench_command(bench_options);

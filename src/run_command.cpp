@@ -5,9 +5,10 @@
 #include <csignal>
 #include <cstdio>
 
+#include <sesi/parallel.hpp>
+
 #include "errors.hpp"
 #include "integrator.hpp"
-#include "observables.hpp"
 #include "output_dir.hpp"
 #include "paper_scene.hpp"
 #include "progress.hpp"
@@ -66,6 +67,17 @@ void apply_overrides(Scene& scene, const RunOptions& options) {
     check_output_every(*options.output_every, option, "--output-every");
     in.output_every = *options.output_every;
   }
+  if (options.threads) {
+    check_threads(*options.threads, option, "--threads");
+    in.threads = static_cast<int>(*options.threads);
+  }
+  if (options.check_every) {
+    check_check_every(*options.check_every, option, "--check-every");
+    in.check_every = *options.check_every;
+  }
+  if (options.trajectory_format) {
+    in.trajectory_format = parse_trajectory_format(*options.trajectory_format, option, "--trajectory-format");
+  }
   const Origin file{scene.source, in.line};
   if (!in.dt) throw InputError(file, "integrator.dt", "missing required key (give it in [integrator] or with --dt)");
   if (!in.t_end) {
@@ -116,10 +128,10 @@ int run_command(const RunOptions& options) {
   interrupted.store(false);
   const SignalGuard signals;
 
+  sesi::parallel::set_threads(scene.integrator.threads);
   const auto integrator = make_integrator(scene);
-  Observables observables(scene);
   const auto start = std::chrono::steady_clock::now();
-  const RunOutcome outcome = run_loop(scene, *integrator, observables, recorder, RunControl{&interrupted, &progress});
+  const RunOutcome outcome = run_loop(scene, *integrator, recorder, RunControl{&interrupted, &progress});
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish();
   recorder.finish(outcome, wall);
@@ -142,8 +154,8 @@ int run_command(const RunOptions& options) {
   print_error(scene.name + ": " + outcome.detail + " at step " + std::to_string(outcome.failed_step) +
               " (t = " + format_number(outcome.failed_t) + ")" +
               (outcome.failed_body > 0 ? ", body " + std::to_string(outcome.failed_body) : std::string()) +
-              "; the outputs up to step " + std::to_string(outcome.steps_done) + " are in " + target.string() +
-              ", marked incomplete");
+              "; last step known good: " + std::to_string(outcome.steps_done) + "; the outputs up to it are in " +
+              target.string() + ", marked incomplete");
   return exit_run_failed;
 }
 

@@ -16,6 +16,9 @@ struct RunOptions {
   std::optional<double> dt;
   std::optional<double> t_end;
   std::optional<long> output_every;
+  std::optional<long> threads;
+  std::optional<long> check_every;
+  std::optional<std::string> trajectory_format;
   bool quiet = false;
 };
 

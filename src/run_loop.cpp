@@ -15,16 +15,9 @@ namespace sesi::program {
 
 namespace {
 
-/// The first body (1-based) whose coordinates or momenta are not finite, or 0.
-int first_non_finite_body(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p) {
-  for (Eigen::Index b = 0; b < q.cols(); ++b) {
-    if (!q.col(b).allFinite() || !p.col(b).allFinite()) return static_cast<int>(b) + 1;
-  }
-  return 0;
-}
-
-/// The singular potentials' close-encounter floors (docs/stability.md), checked after every
-/// step on the embedding points; nothing to do for scenes without a singular potential.
+/// The singular potentials' close-encounter floors (docs/stability.md), checked at the run's
+/// checks on the embedding points in O(N log N) (close and, for cotangent terms on S^n,
+/// antipodal pairs through the neighbour index); nothing to do without a singular potential.
 class EncounterCheck {
  public:
   EncounterCheck(const Scene& scene, const Geometry& geometry) : scene_(scene), geometry_(geometry) {
@@ -53,6 +46,11 @@ class EncounterCheck {
                " potential (potential[" + std::to_string(t.index + 1) + "], min_distance)";
     };
     Eigen::VectorXd a, b;
+    const auto pair = [&](const Term& t, int i, int j) {
+      a = x.col(i);
+      b = x.col(j);
+      consider(t, geometry_.distance(a, b), i + 1, j + 1);
+    };
     for (const Term& t : terms_) {
       const PotentialSpec& spec = scene_.potentials[t.index];
       if (const auto* central = std::get_if<CentralCotangentSpec>(&spec)) {
@@ -62,12 +60,9 @@ class EncounterCheck {
         }
         continue;
       }
-      for (Eigen::Index j = 1; j < x.cols(); ++j) {
-        b = x.col(j);
-        for (Eigen::Index i = 0; i < j; ++i) {
-          a = x.col(i);
-          consider(t, geometry_.distance(a, b), static_cast<int>(i) + 1, static_cast<int>(j) + 1);
-        }
+      for (const auto& [i, j] : geometry_.close_pairs(x, t.floor)) pair(t, i, j);
+      if (scene_.space.kind == SpaceKind::sphere && std::holds_alternative<CotangentGravitySpec>(spec)) {
+        for (const auto& [i, j] : geometry_.close_pairs(x, t.floor, /*antipodal=*/true)) pair(t, i, j);
       }
     }
     return detail;
@@ -111,23 +106,26 @@ struct Schedule {
 
 }  // namespace
 
-RunOutcome run_loop(const Scene& scene, Integrator& integrator, Observables& observe, Recorder& recorder,
-                    const RunControl& control) {
+long default_check_every(int bodies) { return bodies < many_bodies ? 1 : 20; }
+
+RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& recorder, const RunControl& control) {
   const Schedule schedule(*scene.integrator.dt, *scene.integrator.t_end);
   const long every = scene.integrator.output_every;
+  const long check_every =
+      scene.integrator.check_every > 0 ? scene.integrator.check_every : default_check_every(scene.body_count());
 
   Snapshot s;
   integrator.read(s.q, s.p);
-  observe.set_state(s.q, s.p);
-  s.energy = observe.energy();
+  s.energy = integrator.energy();
   if (!std::isfinite(s.energy)) {
     throw InputError(Origin{scene.source}, "",
                      "the initial energy is not finite (body " +
-                         std::to_string(observe.body_with_non_finite_energy()) +
+                         std::to_string(integrator.body_with_non_finite_energy()) +
                          "): check the initial conditions against the potentials");
   }
-  s.momentum = observe.momentum_map();
-  s.x = observe.points();
+  s.momentum = integrator.momentum_map();
+  s.x = integrator.points();
+  s.v = integrator.velocities();
   recorder.track(s.energy, s.momentum);
   recorder.write_row(s);
 
@@ -136,27 +134,30 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Observables& obs
   const EncounterCheck encounters(scene, geometry);
 
   RunOutcome outcome;
-  Snapshot good = s;         // the last finite state
-  bool good_written = true;  // ... and whether it is a row already
+  // The last state that passed a check, and whether it is a row already. Checks (energy,
+  // momentum map, guard, close encounters) run every check_every steps, at every output row and
+  // at the last step; finiteness after every step. A failure names the step where it was found
+  // and this last step known good, and no row is written past it.
+  Snapshot good = s;
+  bool good_written = true;
   for (long k = 1; k <= schedule.steps; ++k) {
     if (control.interrupted && control.interrupted->load(std::memory_order_relaxed)) {
       outcome.reason = StopReason::interrupted;
       outcome.detail = "interrupted by a signal";
       break;
     }
+    const bool row = k % every == 0 || k == schedule.steps;
+    const bool check = row || k % check_every == 0;
     int bad_body = 0;
-    bool points_fresh = false;  // s.x already holds this step's points
     try {
       integrator.step(schedule.time(k - 1), schedule.h(k));
-      integrator.read(s.q, s.p);
-      bad_body = first_non_finite_body(s.q, s.p);
-      if (bad_body == 0) {
-        observe.set_state(s.q, s.p);
-        s.energy = observe.energy();
+      bad_body = integrator.first_non_finite_body();
+      if (bad_body == 0 && check) {
+        s.energy = integrator.energy();
         if (std::isfinite(s.energy)) {
-          s.momentum = observe.momentum_map();
+          s.momentum = integrator.momentum_map();
         } else {
-          bad_body = std::max(1, observe.body_with_non_finite_energy());
+          bad_body = std::max(1, integrator.body_with_non_finite_energy());
         }
       }
     } catch (const InvariantFailure& e) {
@@ -167,11 +168,10 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Observables& obs
       outcome.reason = StopReason::non_finite;
       outcome.failed_body = bad_body;
       outcome.detail = "the state became non-finite";
-    } else if (outcome.reason == StopReason::completed) {
+    } else if (outcome.reason == StopReason::completed && check) {
       // The close-encounter floor, then the energy guard (an encounter also spoils the energy).
+      s.x = integrator.points();
       if (encounters.active()) {
-        s.x = observe.points();
-        points_fresh = true;
         if (std::string detail = encounters.check(s.x); !detail.empty()) {
           outcome.reason = StopReason::close_encounter;
           outcome.detail = std::move(detail);
@@ -190,22 +190,21 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Observables& obs
       outcome.failed_t = schedule.time(k);
       break;
     }
-    s.step = k;
-    s.t = schedule.time(k);
-    recorder.track(s.energy, s.momentum);
-    outcome.steps_done = k;
-    good_written = k % every == 0 || k == schedule.steps;
-    if (good_written) {
-      if (!points_fresh) s.x = observe.points();
-      recorder.write_row(s);
+    if (check) {
+      s.step = k;
+      s.t = schedule.time(k);
+      integrator.read(s.q, s.p);
+      s.v = integrator.velocities();
+      recorder.track(s.energy, s.momentum);
+      if (row) recorder.write_row(s);
+      good_written = row;
+      std::swap(good, s);
     }
-    std::swap(good, s);
-    if (control.progress) control.progress->update(k, good.t);
+    if (control.progress) control.progress->update(k, schedule.time(k));
   }
-  // The last finite state closes the outputs: as a row if it is not one yet, and in the summary.
-  observe.set_state(good.q, good.p);
-  good.x = observe.points();
-  good.v = observe.velocities();
+  // The outputs end at the last state known good: a row if it is not one yet, and the summary's
+  // final state.
+  outcome.steps_done = good.step;
   if (!good_written) recorder.write_row(good);
   recorder.set_final(std::move(good));
   return outcome;

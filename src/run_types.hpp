@@ -27,8 +27,8 @@ enum class StopReason { completed, non_finite, invariant_failed, interrupted, en
 /// How a run ended.
 struct RunOutcome {
   StopReason reason = StopReason::completed;
-  long steps_done = 0;     ///< steps whose result was finite
-  long failed_step = 0;    ///< the step that failed (1-based), 0 if none
+  long steps_done = 0;     ///< the last step known good: the last that passed the run's checks
+  long failed_step = 0;    ///< the step where the failure was found (1-based), 0 if none
   double failed_t = 0.0;   ///< its end time
   int failed_body = 0;     ///< 1-based, 0 when not known
   std::string detail;      ///< what failed, in words

@@ -22,4 +22,8 @@ std::string_view potential_kind(const PotentialSpec& spec) {
   return std::visit(Kind{}, spec);
 }
 
+std::string_view trajectory_format_name(TrajectoryFormat format) {
+  return format == TrajectoryFormat::h5md ? "h5md" : "csv";
+}
+
 }  // namespace sesi::program

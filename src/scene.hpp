@@ -62,6 +62,11 @@ using PotentialSpec = std::variant<ChordWellSpec, CotangentGravitySpec, CentralC
 /// The `kind` string of a potential.
 std::string_view potential_kind(const PotentialSpec& spec);
 
+enum class TrajectoryFormat { csv, h5md };
+
+/// "csv", "h5md".
+std::string_view trajectory_format_name(TrajectoryFormat format);
+
 struct IntegratorSpec {
   std::string method = "sesi4";
   std::optional<double> dt;     ///< required by the time the run starts (file or --dt)
@@ -70,6 +75,13 @@ struct IntegratorSpec {
   /// Threshold of the energy guard on |E - E0| / (K0 + |V0|) (sesi::EnergyGuard); empty: the
   /// library's default; 0: off (`energy_guard = false`).
   std::optional<double> energy_guard;
+  /// Threads for forces, flows and diagnostics; 0: all cores (results do not depend on it).
+  int threads = 0;
+  /// Steps between the energy, momentum, guard and close-encounter checks (output rows are
+  /// always checked); 0: the default, default_check_every(body count) (run_loop.cpp).
+  long check_every = 0;
+  /// Format of the trajectory: csv (trajectory.csv) or h5md (trajectory.h5, H5MD 1.1).
+  TrajectoryFormat trajectory_format = TrajectoryFormat::csv;
   int line = 0;  ///< line of [integrator] in the scene file (0: none), for messages
 };
 

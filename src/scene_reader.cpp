@@ -557,7 +557,9 @@ class SceneReader {
     if (!table) return;  // every setting may come from the command line
     const TableReader in(*table, "integrator", file_);
     scene_.integrator.line = in.origin().line;
-    static constexpr std::array keys = {"method"sv, "dt"sv, "t_end"sv, "output_every"sv, "energy_guard"sv};
+    static constexpr std::array keys = {"method"sv,       "dt"sv,          "t_end"sv,
+                                        "output_every"sv, "energy_guard"sv, "threads"sv,
+                                        "check_every"sv,  "trajectory_format"sv};
     in.allow_only(keys, "[integrator]");
     IntegratorSpec& spec = scene_.integrator;
     if (in.has("method")) {
@@ -575,6 +577,20 @@ class SceneReader {
     if (in.has("output_every")) {
       spec.output_every = in.integer("output_every", "an integer >= 1");
       check_output_every(spec.output_every, in.origin_of("output_every"), in.key_path("output_every"));
+    }
+    if (in.has("threads")) {
+      const long threads = in.integer("threads", "an integer >= 0 (0: all cores)");
+      check_threads(threads, in.origin_of("threads"), in.key_path("threads"));
+      spec.threads = static_cast<int>(threads);
+    }
+    if (in.has("check_every")) {
+      spec.check_every = in.integer("check_every", "an integer >= 1");
+      check_check_every(spec.check_every, in.origin_of("check_every"), in.key_path("check_every"));
+    }
+    if (in.has("trajectory_format")) {
+      spec.trajectory_format = parse_trajectory_format(in.string("trajectory_format", "\"csv\" or \"h5md\""),
+                                                       in.origin_of("trajectory_format"),
+                                                       in.key_path("trajectory_format"));
     }
     if (in.has("energy_guard")) {
       // false turns the guard off; a number is the threshold on the relative energy error.
@@ -601,6 +617,8 @@ class SceneReader {
     const double antipodal = std::numbers::pi * scene_.space.radius;
     std::vector<Eigen::VectorXd> x;
     for (const Body& b : scene_.bodies) x.push_back(g.embed(b.q));
+    Eigen::MatrixXd points(g.ambient_dim(), count);
+    for (int i = 0; i < count; ++i) points.col(i) = x[static_cast<std::size_t>(i)];
     for (std::size_t k = 0; k < scene_.potentials.size(); ++k) {
       const PotentialSpec& spec = scene_.potentials[k];
       const std::string term = std::string(potential_kind(spec)) + " potential (potential[" +
@@ -617,33 +635,50 @@ class SceneReader {
         continue;
       }
       const bool singular_at_contact = !std::holds_alternative<HarmonicPairSpec>(spec);
-      for (int j = 1; j < count; ++j) {
-        for (int i = 0; i < j; ++i) {
-          const double d = g.distance(x[i], x[j]);
-          const std::string pair = " and bodies[" + std::to_string(i + 1) + "]";
-          if (singular_at_contact && d <= same_point_tolerance * scale) {
-            body_error(j, "at the same point as bodies[" + std::to_string(i + 1) + "], where the " +
-                              term + " is singular");
-          }
-          if (std::holds_alternative<CotangentGravitySpec>(spec) && sphere &&
-              d >= antipodal * (1 - same_point_tolerance)) {
-            body_error(j, "antipodal to bodies[" + std::to_string(i + 1) + "], where the " + term +
-                              " is singular");
-          }
-          check_floor(spec, j, d, "bodies[" + std::to_string(i + 1) + "]", term);
-          if (std::holds_alternative<ChordWellSpec>(spec)) {
-            // s = chord / (sqrt(3) R) must stay below 1 (the well's square root).
-            const double kappa = sphere ? 1 / (scale * scale) : scene_.space.kind == SpaceKind::hyperbolic ? -1 / (scale * scale) : 0.0;
-            const double chord = 2 * sesi::special::sn(kappa, d / 2);
-            const double s = chord / (std::numbers::sqrt3 * scale);
-            if (!(s < 1.0)) {
-              body_error(j, "too far from bodies[" + std::to_string(i + 1) + "] for the " + term +
-                                ": chord " + format_number(chord) + ", expected < sqrt(3) * " +
-                                (sphere || scene_.space.kind == SpaceKind::hyperbolic ? "radius" : "1"));
-            }
+      const bool cotangent_on_sphere = std::holds_alternative<CotangentGravitySpec>(spec) && sphere;
+      const auto check_pair = [&](int i, int j) {
+        const double d = g.distance(x[static_cast<std::size_t>(i)], x[static_cast<std::size_t>(j)]);
+        if (singular_at_contact && d <= same_point_tolerance * scale) {
+          body_error(j, "at the same point as bodies[" + std::to_string(i + 1) + "], where the " + term +
+                            " is singular");
+        }
+        if (cotangent_on_sphere && d >= antipodal * (1 - same_point_tolerance)) {
+          body_error(j, "antipodal to bodies[" + std::to_string(i + 1) + "], where the " + term + " is singular");
+        }
+        check_floor(spec, j, d, "bodies[" + std::to_string(i + 1) + "]", term);
+        if (std::holds_alternative<ChordWellSpec>(spec)) {
+          // s = chord / (sqrt(3) R) must stay below 1 (the well's square root).
+          const double kappa = sphere ? 1 / (scale * scale) : scene_.space.kind == SpaceKind::hyperbolic ? -1 / (scale * scale) : 0.0;
+          const double chord = 2 * sesi::special::sn(kappa, d / 2);
+          const double s = chord / (std::numbers::sqrt3 * scale);
+          if (!(s < 1.0)) {
+            body_error(j, "too far from bodies[" + std::to_string(i + 1) + "] for the " + term +
+                              ": chord " + format_number(chord) + ", expected < sqrt(3) * " +
+                              (sphere || scene_.space.kind == SpaceKind::hyperbolic ? "radius" : "1"));
           }
         }
+      };
+      if (std::holds_alternative<ChordWellSpec>(spec)) {
+        // The well bounds every pair from above: all pairs (chord-well scenes are small).
+        for (int j = 1; j < count; ++j) {
+          for (int i = 0; i < j; ++i) check_pair(i, j);
+        }
+        continue;
       }
+      // Only pairs near contact (or near antipodal) can fail: find them through the neighbour
+      // index, and check them in the order of the all-pairs loop (j, then i), so that the first
+      // error reported is the same.
+      const double floor = encounter_floor(spec, scale);
+      const double near = 2 * std::max(same_point_tolerance * scale, floor) + 1e-300;
+      std::vector<std::pair<int, int>> candidates;  // (j, i)
+      for (const auto& [i, j] : g.close_pairs(points, near)) candidates.emplace_back(j, i);
+      if (cotangent_on_sphere) {
+        const double gap = 2 * std::max(antipodal * same_point_tolerance, floor) + 1e-300;
+        for (const auto& [i, j] : g.close_pairs(points, gap, /*antipodal=*/true)) candidates.emplace_back(j, i);
+      }
+      std::sort(candidates.begin(), candidates.end());
+      candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+      for (const auto& [j, i] : candidates) check_pair(i, j);
     }
   }
 

@@ -12,7 +12,7 @@
 
 namespace sesi::program {
 
-/// Statistics of the conserved quantities over every step of a run.
+/// Statistics of the conserved quantities over the checked steps of a run (run_loop.hpp).
 struct InvariantStats {
   double energy_initial = 0.0, energy_final = 0.0;
   double max_abs_energy_error = 0.0, max_rel_energy_error = 0.0;

@@ -10,6 +10,8 @@
 /// System (|x_i - x_j| on S^n and E^n, the Minkowski chord 2R sinh(d/2R) on H^n): no arc
 /// function per pair. The geodesic aggregate gets the geodesic distance d.
 
+#include <algorithm>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -20,57 +22,99 @@
 
 namespace sesi::program {
 
-/// The pair terms of a scene that are functions of the chord c: W(c) = sum of the terms' W.
-template <class Chart>
-class ChordPairTerms {
+/// A sum of pair terms of one distance kind, each one of Alternatives: W = sum of the terms' W.
+/// On a space with pair_geometry the sum is an AlgebraicPairTerm: a term with an algebraic form
+/// (cotangent gravity) gets the pair's geometry, the others its distance, computed once.
+template <class Kind, class... Alternatives>
+class PairSum {
  public:
-  using distance_kind = sesi::chord_distance;
-  using Term = sesi::ChordWell<double>;
+  using distance_kind = Kind;
+  using Term = std::variant<Alternatives...>;
 
   void add(Term term) { terms_.push_back(std::move(term)); }
   bool empty() const { return terms_.empty(); }
+  const std::vector<Term>& terms() const { return terms_; }
 
-  double value(const Chart& space, double c, double mi, double mj) const {
-    double w = 0.0;
-    for (const Term& t : terms_) w += t.value(space, c, mi, mj);
-    return w;
+  template <class Space>
+  double value(const Space& space, double d, double mi, double mj) const {
+    return sum(d, [&](const auto& t, auto arg) { return t.value(space, arg, mi, mj); });
   }
-  double derivative(const Chart& space, double c, double mi, double mj) const {
-    double dw = 0.0;
-    for (const Term& t : terms_) dw += t.derivative(space, c, mi, mj);
-    return dw;
+  template <class Space>
+  double derivative(const Space& space, double d, double mi, double mj) const {
+    return sum(d, [&](const auto& t, auto arg) { return t.derivative(space, arg, mi, mj); });
+  }
+  template <class Space>
+    requires sesi::HasPairGeometry<Space>
+  double value(const Space& space, const sesi::PairGeometry<double>& g, double mi, double mj) const {
+    return sum_on(space, g, [&](const auto& t, auto arg) { return t.value(space, arg, mi, mj); });
+  }
+  template <class Space>
+    requires sesi::HasPairGeometry<Space>
+  double derivative(const Space& space, const sesi::PairGeometry<double>& g, double mi, double mj) const {
+    return sum_on(space, g, [&](const auto& t, auto arg) { return t.derivative(space, arg, mi, mj); });
+  }
+  template <class Space>
+    requires sesi::HasPairGeometry<Space>
+  double derivative_over_sn(const Space& space, const sesi::PairGeometry<double>& g, double mi, double mj) const {
+    return sum_on(space, g, [&](const auto& t, auto arg) {
+      if constexpr (requires { t.derivative_over_sn(space, arg, mi, mj); }) {
+        return t.derivative_over_sn(space, arg, mi, mj);
+      } else {
+        return t.derivative(space, arg, mi, mj) / g.sn;
+      }
+    });
   }
 
  private:
+  template <class F>
+  double sum(double d, F&& f) const {
+    double w = 0.0;
+    for (const Term& term : terms_) w += std::visit([&](const auto& t) { return f(t, d); }, term);
+    return w;
+  }
+  template <class Space, class F>
+  double sum_on(const Space& space, const sesi::PairGeometry<double>& g, F&& f) const {
+    double d = -1.0;  // the distance, once a term needs it
+    const auto one = [&](const auto& t) {
+      using T = std::remove_cvref_t<decltype(t)>;
+      if constexpr (requires { t.value(space, g, 1.0, 1.0); }) {
+        return f(t, g);
+      } else if constexpr (sesi::is_chord_term<T>) {
+        return f(t, g.chord());
+      } else {
+        if (d < 0.0) d = space.distance_of(g);
+        return f(t, d);
+      }
+    };
+    // One term, the common case, without the loop (this is the inner loop of all-pairs sums).
+    if (terms_.size() == 1) return 0.0 + std::visit(one, terms_.front());
+    double w = 0.0;
+    for (const Term& term : terms_) w += std::visit(one, term);
+    return w;
+  }
+
   std::vector<Term> terms_;
 };
 
-/// The pair terms of a scene that are functions of the geodesic distance d: W(d) = sum of W.
+/// The pair terms of a scene that are functions of the chord c (the seed's chord well).
 template <class Chart>
-class PairTerms {
+using ChordPairTerms = PairSum<sesi::chord_distance, sesi::ChordWell<double>>;
+
+/// The long-range pair terms of a scene, functions of the geodesic distance d: all pairs.
+template <class Chart>
+using PairTerms = PairSum<sesi::geodesic_distance, sesi::CotangentGravity<double>, sesi::HarmonicPair<double>>;
+
+/// The short-range pair terms (Lennard-Jones): through a neighbour index, out to the largest
+/// cutoff (sesi::ShortRangeTerm).
+template <class Chart>
+class ShortPairTerms : public PairSum<sesi::geodesic_distance, sesi::LennardJones<double>> {
  public:
-  using distance_kind = sesi::geodesic_distance;
-  using Term = std::variant<sesi::CotangentGravity<double>, sesi::HarmonicPair<double>,
-                            sesi::LennardJones<double>>;
-
-  void add(Term term) { terms_.push_back(std::move(term)); }
-  bool empty() const { return terms_.empty(); }
-
-  double value(const Chart& space, double d, double mi, double mj) const {
-    double w = 0.0;
-    for (const Term& term : terms_)
-      w += std::visit([&](const auto& t) { return t.value(space, d, mi, mj); }, term);
-    return w;
+  template <class Space>
+  double range(const Space&) const {
+    double r = 0.0;
+    for (const auto& term : terms()) r = std::max(r, std::get<sesi::LennardJones<double>>(term).cutoff);
+    return r;
   }
-  double derivative(const Chart& space, double d, double mi, double mj) const {
-    double dw = 0.0;
-    for (const Term& term : terms_)
-      dw += std::visit([&](const auto& t) { return t.derivative(space, d, mi, mj); }, term);
-    return dw;
-  }
-
- private:
-  std::vector<Term> terms_;
 };
 
 /// All external terms of a scene: V(x) = sum of the terms' V.
@@ -91,23 +135,29 @@ class ExternalTerms {
     return v;
   }
 
+  /// Called for many bodies at once on threads, so it keeps no scratch of its own; one term,
+  /// the common case, writes g directly.
   void gradient(const Chart& space, const Ambient& x, double m, Ambient& g) const {
+    if (terms_.size() == 1) {
+      std::visit([&](const auto& t) { t.gradient(space, x, m, g); }, terms_.front());
+      return;
+    }
     g = Ambient::Zero(x.size());
+    Ambient one(x.size());
     for (const Term& term : terms_) {
-      std::visit([&](const auto& t) { t.gradient(space, x, m, scratch_); }, term);
-      g += scratch_;
+      std::visit([&](const auto& t) { t.gradient(space, x, m, one); }, term);
+      g += one;
     }
   }
 
  private:
   std::vector<Term> terms_;
-  mutable Ambient scratch_;  // one term's gradient (no allocation per call)
 };
 
 /// The scene's potentials, sorted into the two aggregates.
 template <class Chart>
 void add_terms(const Scene& scene, ChordPairTerms<Chart>& chords, PairTerms<Chart>& pairs,
-               ExternalTerms<Chart>& externals) {
+               ShortPairTerms<Chart>& short_pairs, ExternalTerms<Chart>& externals) {
   for (const PotentialSpec& spec : scene.potentials) {
     if (const auto* s = std::get_if<ChordWellSpec>(&spec)) {
       chords.add(sesi::ChordWell<double>(s->theta0, s->strength));
@@ -116,7 +166,7 @@ void add_terms(const Scene& scene, ChordPairTerms<Chart>& chords, PairTerms<Char
     } else if (const auto* s = std::get_if<HarmonicPairSpec>(&spec)) {
       pairs.add(sesi::HarmonicPair<double>{s->k, s->d0});
     } else if (const auto* s = std::get_if<LennardJonesSpec>(&spec)) {
-      pairs.add(sesi::LennardJones<double>{s->epsilon, s->sigma, s->cutoff});
+      short_pairs.add(sesi::LennardJones<double>{s->epsilon, s->sigma, s->cutoff});
     } else if (const auto* s = std::get_if<CentralCotangentSpec>(&spec)) {
       sesi::CentralCotangent<Chart> term;
       term.k = s->k;
@@ -126,21 +176,23 @@ void add_terms(const Scene& scene, ChordPairTerms<Chart>& chords, PairTerms<Char
   }
 }
 
-/// The one system type of a chart: masses, two pair aggregates and an external aggregate.
+/// The one system type of a chart: masses, three pair sums and the external terms.
 template <class Chart>
-using SystemOf = sesi::System<Chart, ChordPairTerms<Chart>, PairTerms<Chart>, ExternalTerms<Chart>>;
+using SystemOf = sesi::System<Chart, ChordPairTerms<Chart>, PairTerms<Chart>, ShortPairTerms<Chart>,
+                              ExternalTerms<Chart>>;
 
 /// The scene's system on chart.
 template <class Chart>
 SystemOf<Chart> make_system(const Scene& scene, const Chart& chart) {
   ChordPairTerms<Chart> chords;
   PairTerms<Chart> pairs;
+  ShortPairTerms<Chart> short_pairs;
   ExternalTerms<Chart> externals;
-  add_terms(scene, chords, pairs, externals);
+  add_terms(scene, chords, pairs, short_pairs, externals);
   std::vector<double> masses;
   for (const Body& b : scene.bodies) masses.push_back(b.mass);
   return SystemOf<Chart>(chart, std::move(masses), std::move(chords), std::move(pairs),
-                         std::move(externals));
+                         std::move(short_pairs), std::move(externals));
 }
 
 }  // namespace sesi::program

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include <sesi/potentials.hpp>
 
@@ -37,6 +38,36 @@ void check_output_every(long output_every, const Origin& origin, std::string_vie
                      "expected an integer >= 1 (steps between output rows), got " +
                          std::to_string(output_every));
   }
+}
+
+void check_threads(long threads, const Origin& origin, std::string_view key) {
+  if (threads < 0 || threads > 4096) {
+    throw InputError(origin, key,
+                     "expected an integer from 0 (all cores) to 4096, got " + std::to_string(threads));
+  }
+}
+
+void check_check_every(long check_every, const Origin& origin, std::string_view key) {
+  if (check_every < 1) {
+    throw InputError(origin, key,
+                     "expected an integer >= 1 (steps between energy and encounter checks), got " +
+                         std::to_string(check_every));
+  }
+}
+
+TrajectoryFormat parse_trajectory_format(std::string_view name, const Origin& origin, std::string_view key) {
+  if (name == "csv") return TrajectoryFormat::csv;
+  if (name == "h5md") {
+#ifdef SESI_HAVE_HDF5
+    return TrajectoryFormat::h5md;
+#else
+    throw InputError(origin, key, "this sesi was built without HDF5, so 'h5md' is not available (expected \"csv\")");
+#endif
+  }
+  const std::vector<std::string_view> names{"csv", "h5md"};
+  throw InputError(origin, key,
+                   "unknown trajectory format '" + std::string(name) + "'" + did_you_mean(name, names) +
+                       " (expected " + one_of(names) + ")");
 }
 
 void check_step_count(double t_end, double dt, const Origin& origin, std::string_view key) {

@@ -19,6 +19,12 @@ void check_method(std::string_view method, const Origin& origin, std::string_vie
 void check_dt(double dt, const Origin& origin, std::string_view key);
 /// t_end: finite and >= 0.
 void check_t_end(double t_end, const Origin& origin, std::string_view key);
+/// threads: >= 0 (0: all cores).
+void check_threads(long threads, const Origin& origin, std::string_view key);
+/// check_every: >= 1.
+void check_check_every(long check_every, const Origin& origin, std::string_view key);
+/// "csv" or "h5md" (h5md only in a build with HDF5).
+TrajectoryFormat parse_trajectory_format(std::string_view name, const Origin& origin, std::string_view key);
 /// output_every: >= 1.
 void check_output_every(long output_every, const Origin& origin, std::string_view key);
 /// t_end / |dt| within max_steps (both already checked on their own).

@@ -8,6 +8,7 @@
 /// exact and explicit: q_i += h dK_i/dp_i, p_k -= h dK_i/dq_k for k < i.
 /// Levels are numbered 0..n-1 in code (level i in code is K_{i+1} of the paper).
 
+#include <cmath>
 #include <concepts>
 #include <Eigen/Core>
 
@@ -70,6 +71,32 @@ concept MetricSpace = EmbeddedChart<C> && requires(const C& c, const typename C:
   { c.distance(x, x) } -> std::convertible_to<typename C::Scalar>;
   c.distance_gradient(x, x, g);  // g = Euclidean d(distance)/dx at the first argument (tangent on S^n, eta g tangent on H^n)
   { c.curvature() } -> std::convertible_to<typename C::Scalar>;
+};
+
+/// What a space of constant curvature kappa knows of a pair of points x, y with one square root
+/// and no transcendental function (Sphere, Hyperbolic, Euclidean::pair_geometry): the pair
+/// kernels of System need nothing more (cotangent gravity is ctn(d) = cs / sn), and the gradient
+/// of the distance at x is G (x - y - one_minus_cs x) / sn (G: the ambient metric, eta on H^n).
+template <class Scalar>
+struct PairGeometry {
+  Scalar chord2 = 0;        ///< c^2 = <x - y, x - y> in the ambient metric; c = 2R sin(d/2R), 2R sinh(d/2R), d
+  Scalar cochord2 = 0;      ///< |x + y|^2 on S^n (2R cos(d/2R) squared), 4R^2 + c^2 on H^n, unused on E^n
+  Scalar sn = 0;            ///< R sin(d/R), R sinh(d/R), d
+  Scalar one_minus_cs = 0;  ///< 1 - cos(d/R) = c^2/2R^2, 1 - cosh(d/R) = -c^2/2R^2, 0
+  Scalar cs() const { return Scalar(1) - one_minus_cs; }
+  Scalar chord() const {
+    using std::sqrt;
+    return sqrt(chord2);
+  }
+};
+
+/// Spaces with pair_geometry and its distance (the algebraic pair kernels of System).
+template <class C>
+concept HasPairGeometry = EmbeddedChart<C> && requires(const C& c, const typename C::Ambient& x,
+                                                       const PairGeometry<typename C::Scalar>& g) {
+  { c.pair_geometry(x, x) } -> std::same_as<PairGeometry<typename C::Scalar>>;
+  { c.distance_of(g) } -> std::convertible_to<typename C::Scalar>;
+  { c.chord_of_distance(g.sn) } -> std::convertible_to<typename C::Scalar>;
 };
 
 namespace detail {

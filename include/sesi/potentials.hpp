@@ -44,6 +44,25 @@ concept PairTerm = EmbeddedChart<Space> &&
 template <class T>
 constexpr bool is_chord_term = std::same_as<typename T::distance_kind, chord_distance>;
 
+/// A pair term of finite range: W and dW/dd vanish for d >= range(space). The system finds its
+/// pairs through a neighbour index (neighbours.hpp) instead of looping over all pairs.
+template <class T, class Space>
+concept ShortRangeTerm = PairTerm<T, Space> && requires(const T& t, const Space& s) {
+  { t.range(s) } -> std::convertible_to<typename Space::Scalar>;
+};
+
+/// A pair term with an algebraic form on a space's PairGeometry (chart.hpp): value(space, g,
+/// m_i, m_j) and dW/dd = derivative(space, g, m_i, m_j) with no transcendental function, used by
+/// the system where the space provides pair_geometry (cotangent gravity: ctn = cs / sn).
+template <class T, class Space>
+concept AlgebraicPairTerm =
+    PairTerm<T, Space> && HasPairGeometry<Space> &&
+    requires(const T& t, const Space& s, const PairGeometry<typename Space::Scalar>& g,
+             typename Space::Scalar m) {
+      { t.value(s, g, m, m) } -> std::convertible_to<typename Space::Scalar>;
+      { t.derivative(s, g, m, m) } -> std::convertible_to<typename Space::Scalar>;
+    };
+
 namespace detail {
 template <class Space>
 typename Space::Scalar radius_or_one(const Space& s) {
@@ -145,6 +164,22 @@ struct CotangentGravity {
   Scalar derivative(const Space& space, Scalar d, Scalar mi, Scalar mj) const {
     return -G * mi * mj * special::ctn_derivative(space.curvature(), d);
   }
+  /// The algebraic form (AlgebraicPairTerm): ctn(d) = cs / sn on S^n, H^n and E^n alike, and
+  /// d ctn / dd = -1 / sn^2 (cot(d/R)/R, coth(d/R)/R and 1/d differentiated; sn = R sin(d/R),
+  /// R sinh(d/R), d).
+  template <class Space>
+  Scalar value(const Space&, const PairGeometry<Scalar>& g, Scalar mi, Scalar mj) const {
+    return -G * mi * mj * g.cs() / g.sn;
+  }
+  template <class Space>
+  Scalar derivative(const Space&, const PairGeometry<Scalar>& g, Scalar mi, Scalar mj) const {
+    return (G * mi * mj) / (g.sn * g.sn);
+  }
+  /// dW/dd / sn, what the gradient needs (one division per pair instead of two).
+  template <class Space>
+  Scalar derivative_over_sn(const Space&, const PairGeometry<Scalar>& g, Scalar mi, Scalar mj) const {
+    return (G * mi * mj) / (g.sn * g.sn * g.sn);
+  }
 };
 
 /// Harmonic spring on the geodesic distance: k/2 (d - d0)^2 per pair.
@@ -182,6 +217,11 @@ struct LennardJones {
   template <class Space>
   Scalar singular_gap(const Space&, Scalar d) const {
     return d;
+  }
+  /// Zero from the cutoff on (ShortRangeTerm).
+  template <class Space>
+  Scalar range(const Space&) const {
+    return cutoff;
   }
 
   Scalar raw(Scalar d) const {
@@ -268,6 +308,21 @@ struct Pair {
 template <class Kind = geodesic_distance, class Value, class Derivative>
 Pair<Kind, Value, Derivative> make_pair(Value v, Derivative d) {
   return {std::move(v), std::move(d)};
+}
+
+/// A user pair term that vanishes (with its derivative) from distance `range` on: the system
+/// finds its pairs through a neighbour index (ShortRangeTerm).
+template <class Kind, class Value, class Derivative, class Scalar>
+struct ShortRangePair : Pair<Kind, Value, Derivative> {
+  Scalar reach;
+  template <class Space>
+  Scalar range(const Space&) const {
+    return reach;
+  }
+};
+template <class Kind = geodesic_distance, class Value, class Derivative, class Scalar>
+ShortRangePair<Kind, Value, Derivative, Scalar> make_short_range_pair(Value v, Derivative d, Scalar range) {
+  return {{std::move(v), std::move(d)}, range};
 }
 
 }  // namespace sesi

@@ -121,32 +121,36 @@ class Composition {
   }
 
  private:
-  /// The exact flow of level i for time h on body b, held in ws_.q, ws_.p (and its trig cache;
+  /// The exact flow of level i for time h on body b, held in sc.q, sc.p (and its trig cache;
   /// own_trig = false leaves level i's own entry stale, see step_dkd).
-  void flow(const Chart& chart, int b, int i, Scalar m, Scalar h, bool own_trig = true) {
+  template <class Scratch>
+  void flow(const Chart& chart, int b, int i, Scalar m, Scalar h, Scratch& sc, bool own_trig = true) {
     if constexpr (HasTrigCache<Chart>) {
-      chart.level_flow(i, ws_.q, ws_.p, m, h, ws_.trig[static_cast<std::size_t>(b)], own_trig);
+      chart.level_flow(i, sc.q, sc.p, m, h, ws_.trig[static_cast<std::size_t>(b)], own_trig);
     } else {
-      level_flow(chart, i, ws_.q, ws_.p, m, h);
+      static_cast<void>(b);
+      static_cast<void>(own_trig);
+      level_flow(chart, i, sc.q, sc.p, m, h);
     }
   }
-  /// Apply f(b, m) to every body b, loaded into ws_.q, ws_.p and stored back.
+  /// Apply f(b, m, scratch) to every body b, loaded into scratch.q, scratch.p and stored back;
+  /// on threads for many bodies (each body's flows touch only its own data).
   template <class Sys, class F>
   void each_body(const Sys& sys, state_type& x, F&& f) {
-    for (int b = 0; b < sys.bodies(); ++b) {
-      ws_.q = x.q.col(b);
-      ws_.p = x.p.col(b);
-      f(b, sys.mass(b));
-      x.q.col(b) = ws_.q;
-      x.p.col(b) = ws_.p;
-    }
+    sys.for_bodies(ws_, [&](int b, auto& sc) {
+      sc.q = x.q.col(b);
+      sc.p = x.p.col(b);
+      f(b, sys.mass(b), sc);
+      x.q.col(b) = sc.q;
+      x.p.col(b) = sc.p;
+    });
   }
   /// Forward level flows on every body: level 0 for time h0, levels 1..last for time h.
   template <class Sys>
   void forward(const Sys& sys, state_type& x, Scalar h0, Scalar h, int last) {
-    each_body(sys, x, [&](int b, Scalar m) {
-      if (h0 != Scalar(0)) flow(sys.chart(), b, 0, m, h0);
-      for (int i = 1; i <= last; ++i) flow(sys.chart(), b, i, m, h);
+    each_body(sys, x, [&](int b, Scalar m, auto& sc) {
+      if (h0 != Scalar(0)) flow(sys.chart(), b, 0, m, h0, sc);
+      for (int i = 1; i <= last; ++i) flow(sys.chart(), b, i, m, h, sc);
     });
   }
   /// Backward level flows on every body: levels from..1 for time h, then level 0 for time h0.
@@ -155,9 +159,9 @@ class Composition {
   template <class Sys>
   void backward(const Sys& sys, state_type& x, Scalar h, Scalar h0, int from,
                 bool stale_top = false) {
-    each_body(sys, x, [&](int b, Scalar m) {
-      for (int i = from; i >= 1; --i) flow(sys.chart(), b, i, m, h, !(stale_top && i == from));
-      if (h0 != Scalar(0)) flow(sys.chart(), b, 0, m, h0, !(stale_top && from == 0));
+    each_body(sys, x, [&](int b, Scalar m, auto& sc) {
+      for (int i = from; i >= 1; --i) flow(sys.chart(), b, i, m, h, sc, !(stale_top && i == from));
+      if (h0 != Scalar(0)) flow(sys.chart(), b, 0, m, h0, sc, !(stale_top && from == 0));
     });
   }
 
@@ -198,7 +202,7 @@ class Composition {
         forward(sys, x, h, h, 0);
       } else {
         forward(sys, x, h / Scalar(2), h / Scalar(2), top - 1);
-        each_body(sys, x, [&](int b, Scalar m) { flow(sys.chart(), b, top, m, h); });
+        each_body(sys, x, [&](int b, Scalar m, auto& sc) { flow(sys.chart(), b, top, m, h, sc); });
         backward(sys, x, h / Scalar(2), h / Scalar(2), top - 1);
       }
       pending = h / Scalar(2) + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));

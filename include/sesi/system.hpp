@@ -6,7 +6,9 @@
 /// and a pair loop exists only for pair terms.
 
 #include <cmath>
+#include <algorithm>
 #include <concepts>
+#include <limits>
 #include <tuple>
 #include <type_traits>
 #include <utility>
@@ -16,6 +18,8 @@
 
 #include "sesi/chart.hpp"
 #include "sesi/config.hpp"
+#include "sesi/neighbours.hpp"
+#include "sesi/parallel.hpp"
 #include "sesi/potentials.hpp"
 #include "sesi/state.hpp"
 
@@ -48,6 +52,37 @@ struct Workspace : TrigStore<Chart> {
   Point q, p;            // one body's coordinates and momenta
   AmbientVector x, y, g, gy;  // one body's (or pair's) ambient points and gradients
   AmbientMatrix X, G;    // all bodies' embedding points and potential gradients
+
+  /// One chunk's scratch in the loops over bodies that run on threads (parallel.hpp).
+  struct Scratch {
+    Point q, p;
+    AmbientVector x, y, g, h, acc;
+  };
+  std::vector<Scratch> scratch;
+  /// Per body: a row's share of a sum (energies), summed in body order afterwards.
+  std::vector<Scalar> rows;
+  /// Per term of the system (by position): the Verlet list of a short-range term.
+  std::vector<VerletList<Chart>> verlet;
+  /// The tiles' partial gradients and energies (System's symmetric pair sums on threads).
+  std::vector<Scalar> tile_gradients, tile_energies;
+
+  /// Scratch for `chunks` chunks of the given sizes (allocates only when they grow).
+  void ensure_scratch(int chunks, int dim, int ambient) {
+    if (static_cast<int>(scratch.size()) < chunks) scratch.resize(static_cast<std::size_t>(chunks));
+    for (Scratch& s : scratch) {
+      if (s.q.size() != dim) {
+        s.q.resize(dim);
+        s.p.resize(dim);
+      }
+      if (s.x.size() != ambient) {
+        s.x.resize(ambient);
+        s.y.resize(ambient);
+        s.g.resize(ambient);
+        s.h.resize(ambient);
+        s.acc.resize(ambient);
+      }
+    }
+  }
 
   Workspace() {
     // Fixed-size members start defined, so that copying a fresh stepper copies no garbage.
@@ -96,6 +131,7 @@ class System {
                 "potential terms act on embedding points: the chart must model EmbeddedChart");
 
   using Workspace = sesi::Workspace<Chart>;
+  using AmbientVectorOf = typename Workspace::AmbientVector;
 
   System(Chart chart, std::vector<Scalar> masses, Terms... terms)
       : chart_(std::move(chart)), masses_(std::move(masses)), terms_(std::move(terms)...) {
@@ -108,6 +144,17 @@ class System {
   int bodies() const { return static_cast<int>(masses_.size()); }
   int dim() const { return chart_.dim(); }
   const std::tuple<Terms...>& terms() const { return terms_; }
+
+  /// How pair sums are formed. automatic: below rows_from bodies the symmetric loop over pairs
+  /// i < j on one thread; from rows_from on, rows (each body sums its own pairs, on threads, so
+  /// the result does not depend on the thread count), short-range terms through a Verlet list
+  /// (neighbours.hpp). all_pairs: rows over all pairs even for short-range terms (the reference
+  /// the lists are tested against: both give the same forces to the bit).
+  enum class PairSearch { automatic, all_pairs };
+  void set_pair_search(PairSearch search) { pair_search_ = search; }
+  PairSearch pair_search() const { return pair_search_; }
+  static constexpr int rows_from = parallel::min_parallel_bodies;
+  bool by_rows() const { return bodies() >= rows_from; }
 
   Workspace make_workspace() const {
     Workspace w;
@@ -137,11 +184,24 @@ class System {
   void refresh(const StateType& s, Workspace& w) const {
     w.resize(dim(), ambient_dim(), bodies());
     if constexpr (HasTrigCache<Chart>) {
-      for (int b = 0; b < bodies(); ++b) {
-        w.q = s.q.col(b);
-        chart_.refresh(w.q, w.trig[static_cast<std::size_t>(b)]);
-      }
+      for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+        sc.q = s.q.col(b);
+        chart_.refresh(sc.q, w.trig[static_cast<std::size_t>(b)]);
+      });
     }
+  }
+
+  /// f(b, scratch) for every body b, on threads from parallel::min_parallel_bodies bodies on
+  /// (f must write only to body b's entries).
+  template <class F>
+  void for_bodies(Workspace& w, F&& f) const {
+    const int n = bodies();
+    const int chunks = parallel::chunks_for(n);
+    w.ensure_scratch(chunks, dim(), ambient_dim());
+    parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
+      typename Workspace::Scratch& sc = w.scratch[static_cast<std::size_t>(c)];
+      for (int b = begin; b < end; ++b) f(b, sc);
+    });
   }
 
   /// Embedding points of all bodies into w.X.
@@ -156,7 +216,8 @@ class System {
     } else {
       embed_all(s, w);
       Scalar v(0);
-      std::apply([&](const auto&... term) { ((v += term_energy(term, w)), ...); }, terms_);
+      int index = 0;
+      std::apply([&](const auto&... term) { ((v += term_energy(term, w, index++)), ...); }, terms_);
       return v;
     }
   }
@@ -175,7 +236,8 @@ class System {
   /// Ambient gradients of the potential for all bodies into w.G (w.X must hold the points).
   void ambient_gradient(Workspace& w) const {
     w.G.setZero();
-    std::apply([&](const auto&... term) { (add_term_gradient(term, w), ...); }, terms_);
+    int index = 0;
+    std::apply([&](const auto&... term) { (add_term_gradient(term, w, index++), ...); }, terms_);
   }
 
   /// The potential kick: p -= h dV/dq, with dV/dq = J(q)^T dV/dx per body.
@@ -192,10 +254,10 @@ class System {
     if constexpr (has_potential) {
       embed_cached(s, w);
       ambient_gradient(w);
-      for (int b = 0; b < bodies(); ++b) {
-        pull_back(s, w, b);
-        s.p.col(b) -= h * w.p;
-      }
+      for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+        pull_back(s, w, b, sc);
+        s.p.col(b) -= h * sc.p;
+      });
     }
   }
   /// The same kick, also keeping the chart gradient dV/dq of every body in grad (dim x bodies),
@@ -205,11 +267,11 @@ class System {
       embed_cached(s, w);
       ambient_gradient(w);
       grad.resize(dim(), bodies());
-      for (int b = 0; b < bodies(); ++b) {
-        pull_back(s, w, b);
-        grad.col(b) = w.p;
-        s.p.col(b) -= h * w.p;
-      }
+      for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+        pull_back(s, w, b, sc);
+        grad.col(b) = sc.p;
+        s.p.col(b) -= h * sc.p;
+      });
     }
   }
 
@@ -220,43 +282,260 @@ class System {
     if constexpr (has_potential) {
       embed_all(s, w);
       ambient_gradient(w);
-      for (int b = 0; b < bodies(); ++b) {
-        pull_back(s, w, b);
-        out.col(b) = w.p;
-      }
+      for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+        pull_back(s, w, b, sc);
+        out.col(b) = sc.p;
+      });
     }
   }
 
  private:
   /// w.X from the caches (or from q for charts without them).
   void embed_cached(const StateType& s, Workspace& w) const {
-    for (int b = 0; b < bodies(); ++b) {
+    for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
       if constexpr (HasTrigCache<Chart>) {
-        chart_.embed(w.trig[static_cast<std::size_t>(b)], w.x);
+        chart_.embed(w.trig[static_cast<std::size_t>(b)], sc.x);
       } else {
-        w.q = s.q.col(b);
-        chart_.embed(w.q, w.x);
+        sc.q = s.q.col(b);
+        chart_.embed(sc.q, sc.x);
       }
       if (s.framed()) {
-        w.X.col(b).noalias() = s.frames[static_cast<std::size_t>(b)] * w.x;  // world = F local
+        w.X.col(b).noalias() = s.frames[static_cast<std::size_t>(b)] * sc.x;  // world = F local
       } else {
-        w.X.col(b) = w.x;
+        w.X.col(b) = sc.x;
+      }
+    });
+  }
+  /// sc.p = J(q_b)^T F_b^T w.G.col(b) (the chain rule through the body's frame, if any).
+  void pull_back(const StateType& s, Workspace& w, int b, typename Workspace::Scratch& sc) const {
+    if (s.framed()) {
+      sc.g.noalias() = s.frames[static_cast<std::size_t>(b)].transpose() * w.G.col(b);
+    } else {
+      sc.g = w.G.col(b);
+    }
+    if constexpr (HasTrigCache<Chart>) {
+      chart_.pullback(w.trig[static_cast<std::size_t>(b)], sc.g, sc.p);
+    } else {
+      sc.q = s.q.col(b);
+      chart_.pullback(sc.q, sc.g, sc.p);
+    }
+  }
+
+  // ---- pair sums by rows (bodies >= rows_from) ----------------------------------------------
+
+  /// The squared chord beyond which a term contributes nothing: a short-range term's range as a
+  /// chord (monotone in the distance), else infinity.
+  template <class Term>
+  Scalar reach2_of(const Term& term) const {
+    if constexpr (ShortRangeTerm<Term, Chart> && HasPairGeometry<Chart>) {
+      const Scalar c = chart_.chord_of_distance(term.range(chart_));
+      return c * c;
+    } else {
+      return std::numeric_limits<Scalar>::infinity();
+    }
+  }
+  /// The Verlet list of a short-range term at w.X (term: its position in the system), or null
+  /// for all pairs.
+  template <class Term>
+  const NeighbourLists* lists_of(const Term& term, Workspace& w, int index) const {
+    if constexpr (ShortRangeTerm<Term, Chart> && HasChordMetric<Chart> && HasPairGeometry<Chart>) {
+      if (pair_search_ == PairSearch::automatic) {
+        if (static_cast<int>(w.verlet.size()) <= index) w.verlet.resize(static_cast<std::size_t>(index) + 1);
+        return &w.verlet[static_cast<std::size_t>(index)].update(chart_, w.X, term.range(chart_));
+      }
+    }
+    static_cast<void>(term);
+    static_cast<void>(index);
+    return nullptr;
+  }
+  /// f(j) for the partners j of body i in ascending order: its list, or every other body; with
+  /// upper, only j > i.
+  template <class F>
+  void for_partners(const NeighbourLists* lists, int i, bool upper, F&& f) const {
+    if (lists) {
+      const int* first = lists->index.data() + lists->begin(i);
+      const int* last = lists->index.data() + lists->end(i);
+      if (upper) first = std::upper_bound(first, last, i);
+      for (const int* j = first; j != last; ++j) f(*j);
+    } else {
+      for (int j = upper ? i + 1 : 0; j < bodies(); ++j) {
+        if (j != i) f(j);
       }
     }
   }
-  /// w.p = J(q_b)^T F_b^T w.G.col(b) (the chain rule through the body's frame, if any).
-  void pull_back(const StateType& s, Workspace& w, int b) const {
-    if (s.framed()) {
-      w.g.noalias() = s.frames[static_cast<std::size_t>(b)].transpose() * w.G.col(b);
+  /// W of the pair (i, j), sc.x holding point i.
+  template <class Term>
+  Scalar pair_value(const Term& term, typename Workspace::Scratch& sc, const Workspace& w, int i, int j,
+                    Scalar reach2) const {
+    sc.y = w.X.col(j);
+    const Scalar mi = mass(i), mj = mass(j);
+    if constexpr (HasPairGeometry<Chart>) {
+      const PairGeometry<Scalar> g = chart_.pair_geometry(sc.x, sc.y);
+      if (g.chord2 >= reach2) return Scalar(0);  // (a NaN chord goes on, and stays NaN)
+      if constexpr (is_chord_term<Term>) {
+        return term.value(chart_, g.chord(), mi, mj);
+      } else if constexpr (AlgebraicPairTerm<Term, Chart>) {
+        return term.value(chart_, g, mi, mj);
+      } else {
+        return term.value(chart_, chart_.distance_of(g), mi, mj);
+      }
     } else {
-      w.g = w.G.col(b);
+      static_cast<void>(reach2);
+      const Scalar d = is_chord_term<Term> ? chord(sc) : chart_.distance(sc.x, sc.y);
+      return term.value(chart_, d, mi, mj);
     }
-    if constexpr (HasTrigCache<Chart>) {
-      chart_.pullback(w.trig[static_cast<std::size_t>(b)], w.g, w.p);
+  }
+  /// gi += dW(i, j)/dx_i and, with Both, gj += dW(i, j)/dx_j; sc.x, sc.y holding points i, j.
+  template <bool Both, class Term, class GI, class GJ>
+  void add_pair_gradient(const Term& term, typename Workspace::Scratch& sc, int i, int j, Scalar reach2,
+                         GI&& gi, GJ&& gj) const {
+    const Scalar mi = mass(i), mj = mass(j);
+    if constexpr (HasPairGeometry<Chart>) {
+      const PairGeometry<Scalar> g = chart_.pair_geometry(sc.x, sc.y);
+      if (g.chord2 >= reach2) return;
+      Scalar dw;
+      sc.g = sc.x - sc.y;
+      if constexpr (is_chord_term<Term>) {
+        const Scalar c = g.chord();
+        dw = term.derivative(chart_, c, mi, mj);  // d chord / dx = G (x - y) / chord
+        if (dw == Scalar(0)) return;
+        dw /= c;
+        if constexpr (Both) sc.h = -sc.g;
+      } else {
+        // d distance / dx = G (x - y - (1 - cs) x) / sn, and the same with x, y swapped: the
+        // tangent gradients of Sphere's and Hyperbolic's distance_gradient, with no
+        // transcendental function. dw is dW/dd / sn.
+        if constexpr (requires { term.derivative_over_sn(chart_, g, mi, mj); }) {
+          dw = term.derivative_over_sn(chart_, g, mi, mj);
+        } else if constexpr (AlgebraicPairTerm<Term, Chart>) {
+          dw = term.derivative(chart_, g, mi, mj) / g.sn;
+        } else {
+          dw = term.derivative(chart_, chart_.distance_of(g), mi, mj) / g.sn;
+        }
+        if (dw == Scalar(0)) return;  // beyond a cutoff
+        if constexpr (Both) sc.h = -sc.g - g.one_minus_cs * sc.y;
+        sc.g -= g.one_minus_cs * sc.x;
+      }
+      if constexpr (requires { chart_.lower(sc.g); }) {
+        chart_.lower(sc.g);
+        if constexpr (Both) chart_.lower(sc.h);
+      }
+      gi += dw * sc.g;
+      if constexpr (Both) gj += dw * sc.h;
     } else {
-      w.q = s.q.col(b);
-      chart_.pullback(w.q, w.g, w.p);
+      static_cast<void>(reach2);
+      if constexpr (is_chord_term<Term>) {
+        const Scalar c = chord(sc);  // leaves G (x - y) in sc.g
+        const Scalar dw = term.derivative(chart_, c, mi, mj) / c;
+        gi += dw * sc.g;
+        if constexpr (Both) gj -= dw * sc.g;
+      } else {
+        const Scalar d = chart_.distance(sc.x, sc.y);
+        const Scalar dw = term.derivative(chart_, d, mi, mj);
+        chart_.distance_gradient(sc.x, sc.y, sc.g);
+        gi += dw * sc.g;
+        if constexpr (Both) {
+          chart_.distance_gradient(sc.y, sc.x, sc.h);
+          gj += dw * sc.h;
+        }
+      }
     }
+  }
+
+  // ---- long-range pair sums by tiles (bodies >= rows_from) ------------------------------------
+  // The pair triangle i < j is cut into square tiles of a block size fixed by the body count
+  // alone; each tile sums its pairs once (both ends, Newton's third law) into its own buffers,
+  // and each body then adds its tiles' shares in tile order. Tiles may run on any thread in any
+  // order: no result depends on the thread count.
+
+  struct Tiling {
+    int n, block, blocks;
+    int tiles() const { return blocks * (blocks + 1) / 2; }
+    /// The tile of blocks I <= J.
+    int tile(int I, int J) const { return I * blocks - I * (I - 1) / 2 + (J - I); }
+    int first(int I) const { return I * block; }
+    int last(int I) const { return std::min(n, (I + 1) * block); }
+  };
+  Tiling tiling() const {
+    // At most 48 blocks (1176 tiles: enough to balance any thread count this side of a node) of
+    // at least 64 bodies (a tile's pairs outweigh its bookkeeping).
+    const int n = bodies();
+    const int block = std::max(64, (n + 47) / 48);
+    return Tiling{n, block, (n + block - 1) / block};
+  }
+  /// For each tile (I, J), f(t, I, J) on threads.
+  template <class F>
+  void for_tiles(const Tiling& tl, F&& f) const {
+    std::vector<std::pair<int, int>> blocks;  // tile t -> (I, J)
+    blocks.reserve(static_cast<std::size_t>(tl.tiles()));
+    for (int I = 0; I < tl.blocks; ++I) {
+      for (int J = I; J < tl.blocks; ++J) blocks.emplace_back(I, J);
+    }
+    parallel::for_chunks(tl.tiles(), std::min(tl.tiles(), 4 * parallel::threads()), [&](int begin, int end, int c) {
+      for (int t = begin; t < end; ++t) f(t, blocks[static_cast<std::size_t>(t)].first, blocks[static_cast<std::size_t>(t)].second, c);
+    });
+  }
+  template <class Term>
+  void add_tiled_gradient(const Term& term, Workspace& w) const {
+    const Tiling tl = tiling();
+    const int a = ambient_dim();
+    const std::size_t per_tile = static_cast<std::size_t>(2 * tl.block * a);
+    w.tile_gradients.assign(per_tile * static_cast<std::size_t>(tl.tiles()), Scalar(0));
+    w.ensure_scratch(std::min(tl.tiles(), 4 * parallel::threads()), dim(), a);
+    const Scalar reach2 = reach2_of(term);
+    for_tiles(tl, [&](int t, int I, int J, int c) {
+      typename Workspace::Scratch& sc = w.scratch[static_cast<std::size_t>(c)];
+      Scalar* buf = w.tile_gradients.data() + per_tile * static_cast<std::size_t>(t);
+      for (int i = tl.first(I); i < tl.last(I); ++i) {
+        sc.x = w.X.col(i);
+        Eigen::Map<AmbientVectorOf> gi(buf + static_cast<std::size_t>((i - tl.first(I)) * a), a);
+        for (int j = I == J ? i + 1 : tl.first(J); j < tl.last(J); ++j) {
+          sc.y = w.X.col(j);
+          Eigen::Map<AmbientVectorOf> gj(buf + static_cast<std::size_t>((tl.block + j - tl.first(J)) * a), a);
+          add_pair_gradient<true>(term, sc, i, j, reach2, gi, gj);
+        }
+      }
+    });
+    // Body i: its share of tiles (I, J) for J = 0, 1, ... in that order.
+    for_bodies(w, [&](int i, typename Workspace::Scratch&) {
+      const int I = i / tl.block;
+      const auto share = [&](int t, int slot) {
+        w.G.col(i) += Eigen::Map<const AmbientVectorOf>(
+            w.tile_gradients.data() + per_tile * static_cast<std::size_t>(t) + static_cast<std::size_t>(slot * a), a);
+      };
+      for (int J = 0; J < tl.blocks; ++J) {
+        // In tile (I, J) body i is a first index when I <= J, a second one when I >= J (both on
+        // the diagonal).
+        if (I <= J) share(tl.tile(I, J), i - tl.first(I));
+        if (I >= J) share(tl.tile(J, I), tl.block + i - tl.first(I));
+      }
+    });
+  }
+  template <class Term>
+  Scalar tiled_energy(const Term& term, Workspace& w) const {
+    const Tiling tl = tiling();
+    w.tile_energies.assign(static_cast<std::size_t>(tl.tiles()), Scalar(0));
+    w.ensure_scratch(std::min(tl.tiles(), 4 * parallel::threads()), dim(), ambient_dim());
+    const Scalar reach2 = reach2_of(term);
+    for_tiles(tl, [&](int t, int I, int J, int c) {
+      typename Workspace::Scratch& sc = w.scratch[static_cast<std::size_t>(c)];
+      Scalar e(0);
+      for (int i = tl.first(I); i < tl.last(I); ++i) {
+        sc.x = w.X.col(i);
+        for (int j = I == J ? i + 1 : tl.first(J); j < tl.last(J); ++j) e += pair_value(term, sc, w, i, j, reach2);
+      }
+      w.tile_energies[static_cast<std::size_t>(t)] = e;
+    });
+    return parallel::sum_in_order(w.tile_energies);
+  }
+
+  /// The chord of sc.x, sc.y in the ambient metric, leaving G (x - y) in sc.g (as chord(w)).
+  Scalar chord(typename Workspace::Scratch& sc) const {
+    using std::sqrt;
+    sc.g = sc.x - sc.y;
+    if constexpr (requires { chart_.lower(sc.g); }) chart_.lower(sc.g);
+    const Scalar c2 = (sc.x - sc.y).dot(sc.g);
+    return sqrt(c2 < Scalar(0) ? Scalar(0) : c2);
   }
 
   /// The chord of the pair w.x, w.y in the ambient metric G, sqrt(<u, u>) with u = x - y, leaving
@@ -282,10 +561,23 @@ class System {
   }
 
   template <class Term>
-  Scalar term_energy(const Term& term, Workspace& w) const {
+  Scalar term_energy(const Term& term, Workspace& w, int index) const {
     Scalar v(0);
     if (inactive(term)) return v;
     if constexpr (PairTerm<Term, Chart>) {
+      if (by_rows()) {
+        if constexpr (!ShortRangeTerm<Term, Chart>) return tiled_energy(term, w);
+        const NeighbourLists* lists = lists_of(term, w, index);
+        const Scalar reach2 = reach2_of(term);
+        w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
+        for_bodies(w, [&](int i, typename Workspace::Scratch& sc) {
+          sc.x = w.X.col(i);
+          Scalar row(0);
+          for_partners(lists, i, /*upper=*/true, [&](int j) { row += pair_value(term, sc, w, i, j, reach2); });
+          w.rows[static_cast<std::size_t>(i)] = row;
+        });
+        return parallel::sum_in_order(w.rows);
+      }
       for (int i = 0; i < bodies(); ++i) {
         w.x = w.X.col(i);
         for (int j = i + 1; j < bodies(); ++j) {
@@ -296,18 +588,39 @@ class System {
       }
     } else {
       static_assert(ExternalTerm<Term, Chart>, "a term must model ExternalTerm or PairTerm");
-      for (int b = 0; b < bodies(); ++b) {
-        w.x = w.X.col(b);
-        v += term.value(chart_, w.x, mass(b));
-      }
+      static_cast<void>(index);
+      w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
+      for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+        sc.x = w.X.col(b);
+        w.rows[static_cast<std::size_t>(b)] = term.value(chart_, sc.x, mass(b));
+      });
+      v = parallel::sum_in_order(w.rows);
     }
     return v;
   }
 
   template <class Term>
-  void add_term_gradient(const Term& term, Workspace& w) const {
+  void add_term_gradient(const Term& term, Workspace& w, int index) const {
     if (inactive(term)) return;
     if constexpr (PairTerm<Term, Chart>) {
+      if (by_rows()) {
+        if constexpr (!ShortRangeTerm<Term, Chart>) {
+          add_tiled_gradient(term, w);
+          return;
+        }
+        const NeighbourLists* lists = lists_of(term, w, index);
+        const Scalar reach2 = reach2_of(term);
+        for_bodies(w, [&](int i, typename Workspace::Scratch& sc) {
+          sc.x = w.X.col(i);
+          sc.acc.setZero();
+          for_partners(lists, i, /*upper=*/false, [&](int j) {
+            sc.y = w.X.col(j);
+            add_pair_gradient<false>(term, sc, i, j, reach2, sc.acc, sc.acc);
+          });
+          w.G.col(i) += sc.acc;
+        });
+        return;
+      }
       for (int i = 0; i < bodies(); ++i) {
         w.x = w.X.col(i);
         for (int j = i + 1; j < bodies(); ++j) {
@@ -334,17 +647,19 @@ class System {
         }
       }
     } else {
-      for (int b = 0; b < bodies(); ++b) {
-        w.x = w.X.col(b);
-        term.gradient(chart_, w.x, mass(b), w.g);
-        w.G.col(b) += w.g;
-      }
+      static_cast<void>(index);
+      for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+        sc.x = w.X.col(b);
+        term.gradient(chart_, sc.x, mass(b), sc.g);
+        w.G.col(b) += sc.g;
+      });
     }
   }
 
   Chart chart_;
   std::vector<Scalar> masses_;
   std::tuple<Terms...> terms_;
+  PairSearch pair_search_ = PairSearch::automatic;
 };
 
 /// Deduction guide: System(chart, masses, terms...).

@@ -3,6 +3,8 @@
 /// Flat E^n in Cartesian coordinates: K_i = p_i^2 / 2m, the chart is its own embedding, and the
 /// hierarchical Strang step is the Stoermer-Verlet method (Hairer, Lubich, Wanner, GNI, I.1.4).
 
+#include <cmath>
+
 #include <Eigen/Core>
 
 #include "sesi/chart.hpp"
@@ -47,6 +49,17 @@ class Euclidean {
   Scalar inner(const Ambient& u, const Ambient& v) const { return u.dot(v); }
 
   Scalar distance(const Ambient& x, const Ambient& y) const { return (x - y).norm(); }
+  /// The chord is the distance (neighbours.hpp).
+  Scalar chord_of_distance(Scalar d) const { return d; }
+  /// The pair x, y (pairs in System): chord = sn = |x - y|, cs = 1.
+  PairGeometry<Scalar> pair_geometry(const Ambient& x, const Ambient& y) const {
+    using std::sqrt;
+    PairGeometry<Scalar> g;
+    g.chord2 = (x - y).squaredNorm();
+    g.sn = sqrt(g.chord2);
+    return g;
+  }
+  Scalar distance_of(const PairGeometry<Scalar>& g) const { return g.sn; }
   void distance_gradient(const Ambient& x, const Ambient& y, Ambient& g) const {
     g = x - y;
     const Scalar norm = g.norm();

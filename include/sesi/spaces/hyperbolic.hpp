@@ -302,6 +302,30 @@ class Hyperbolic {
   /// System uses it for chord terms: the gradient of sqrt(<u, u>_L) in u is eta u / chord.
   void lower(Ambient& v) const { v[dim_] = -v[dim_]; }
 
+  /// The Minkowski chord 2R sinh(d/2R) of geodesic distance d: monotone in d, so a distance
+  /// cutoff is a chord cutoff (neighbours.hpp).
+  Scalar chord_of_distance(Scalar d) const {
+    using std::sinh;
+    return Scalar(2) * radius_ * sinh(d / (Scalar(2) * radius_));
+  }
+  /// The pair x, y with one square root (chart.hpp, PairGeometry): chord c = |x - y|_L,
+  /// R sinh(d/R) = c sqrt(4R^2 + c^2) / 2R and 1 - cosh(d/R) = -c^2 / 2R^2 (no cancellation).
+  PairGeometry<Scalar> pair_geometry(const Ambient& x, const Ambient& y) const {
+    using std::sqrt;
+    PairGeometry<Scalar> g;
+    const Scalar c2 = minkowski(x - y, x - y);
+    g.chord2 = c2 < Scalar(0) ? Scalar(0) : c2;  // round-off negatives only; NaN stays NaN
+    g.cochord2 = Scalar(4) * radius_ * radius_ + g.chord2;
+    g.sn = sqrt(g.chord2 * g.cochord2) * (Scalar(0.5) / radius_);  // one division fewer per pair
+    g.one_minus_cs = -g.chord2 * inv_r2_ / Scalar(2);
+    return g;
+  }
+  /// The geodesic distance of a pair_geometry: 2R asinh(c / 2R), as distance().
+  Scalar distance_of(const PairGeometry<Scalar>& g) const {
+    using std::asinh;
+    using std::sqrt;
+    return Scalar(2) * radius_ * asinh(sqrt(g.chord2) / (Scalar(2) * radius_));
+  }
   /// Geodesic distance R acosh(-<x,y>/R^2), as 2 R asinh(|x - y|_L / 2R): accurate when small.
   Scalar distance(const Ambient& x, const Ambient& y) const {
     using std::asinh;

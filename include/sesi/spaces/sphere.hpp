@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <Eigen/Core>
 
 #include "sesi/chart.hpp"
@@ -180,6 +181,30 @@ class Sphere {
   Scalar distance(const Ambient& x, const Ambient& y) const {
     using std::atan2;
     return Scalar(2) * radius_ * atan2((x - y).norm(), (x + y).norm());
+  }
+  /// The chord 2R sin(d/2R) of geodesic distance d (2R from d = pi R on): monotone in d, so a
+  /// distance cutoff is a chord cutoff (neighbours.hpp).
+  Scalar chord_of_distance(Scalar d) const {
+    using std::sin;
+    return d >= std::numbers::pi_v<Scalar> * radius_ ? Scalar(2) * radius_
+                                                     : Scalar(2) * radius_ * sin(d / (Scalar(2) * radius_));
+  }
+  /// The pair x, y with one square root (chart.hpp, PairGeometry): R sin(d/R) =
+  /// |x - y| |x + y| / 2R and 1 - cos(d/R) = |x - y|^2 / 2R^2, both accurate at all angles.
+  PairGeometry<Scalar> pair_geometry(const Ambient& x, const Ambient& y) const {
+    using std::sqrt;
+    PairGeometry<Scalar> g;
+    g.chord2 = (x - y).squaredNorm();
+    g.cochord2 = (x + y).squaredNorm();
+    g.sn = sqrt(g.chord2 * g.cochord2) * (Scalar(0.5) / radius_);  // one division fewer per pair
+    g.one_minus_cs = g.chord2 * inv_r2_ / Scalar(2);
+    return g;
+  }
+  /// The geodesic distance of a pair_geometry: 2R atan2(|x - y|, |x + y|), as distance().
+  Scalar distance_of(const PairGeometry<Scalar>& g) const {
+    using std::atan2;
+    using std::sqrt;
+    return Scalar(2) * radius_ * atan2(sqrt(g.chord2), sqrt(g.cochord2));
   }
   /// Gradient of the distance in x, tangent at x: -(b - (a.b) a) / |b - (a.b) a|, a = x/R, b = y/R.
   void distance_gradient(const Ambient& x, const Ambient& y, Ambient& g) const {

@@ -1,0 +1,402 @@
+#pragma once
+/// @file neighbours.hpp
+/// Which bodies are near which: the neighbour index behind short-range pair terms (a term with
+/// a range, potentials.hpp), so that a force evaluation costs O(N) instead of O(N^2).
+///
+/// The exact test is always the chord in the ambient metric, which is monotone in the geodesic
+/// distance on S^n (2R sin(d/2R)), H^n (the Minkowski chord 2R sinh(d/2R)) and E^n, so a
+/// distance cutoff is a chord cutoff with no approximation. Cells only propose candidates:
+///  - S^n and E^n: cubic cells of the ambient space, of side the chord reach (a chord is the
+///    Euclidean distance of the embedding points there), searched in the 3^a cells around;
+///  - H^n: a binary-tiling-like grid in upper half-space coordinates (w, y) (Beardon, "The
+///    Geometry of Discrete Groups", sec. 7.1; the metric R |d(w,y)| / y): bands of hyperbolic
+///    height h in log y, each cut into boxes of hyperbolic width <= h. Every cell has a bounded
+///    hyperbolic size wherever it is, so a cluster of fixed density costs O(N) at any distance
+///    from the chart's origin. The half-space's boundary point is put opposite the bodies'
+///    centroid, so that the coordinates of the bodies are computed without cancellation.
+///
+/// Lists are full (i sees j and j sees i) and sorted by body index, so a row's sum over its
+/// neighbours does not depend on how the index was built or when it was last rebuilt: forces
+/// from the index equal those of the all-pairs loop with the same kernel to the bit.
+///
+/// VerletList keeps a list with a skin (Verlet 1967; Allen & Tildesley, 2nd ed., sec. 5.3):
+/// pairs within range + skin, rebuilt only when some body has moved more than skin / 2 since the
+/// last build (two bodies then moved at most skin together, so no pair entered the range unseen).
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sesi/parallel.hpp"
+
+namespace sesi {
+
+/// Charts whose ambient chord the neighbour index understands (Sphere, Hyperbolic, Euclidean).
+template <class C>
+concept HasChordMetric = requires(const C& c, typename C::Scalar d) {
+  { c.chord_of_distance(d) } -> std::convertible_to<typename C::Scalar>;
+  { c.curvature() } -> std::convertible_to<typename C::Scalar>;
+};
+
+/// Full neighbour lists in compressed rows: the neighbours of body i are
+/// index[offset[i] .. offset[i+1]), ascending.
+struct NeighbourLists {
+  std::vector<int> offset;
+  std::vector<int> index;
+
+  int bodies() const { return offset.empty() ? 0 : static_cast<int>(offset.size()) - 1; }
+  int begin(int i) const { return offset[static_cast<std::size_t>(i)]; }
+  int end(int i) const { return offset[static_cast<std::size_t>(i) + 1]; }
+  /// Unordered pairs held (each is listed twice).
+  long pairs() const { return static_cast<long>(index.size()) / 2; }
+};
+
+/// The neighbour index of one chart type.
+template <class Chart>
+class NeighbourIndex {
+ public:
+  using Scalar = typename Chart::Scalar;
+  using Points = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+
+  /// Lists of all pairs with geodesic distance < reach among the columns of X (world points,
+  /// ambient x bodies).
+  template <class Matrix>
+  void build(const Chart& chart, const Matrix& X, Scalar reach, NeighbourLists& out) {
+    const int n = static_cast<int>(X.cols());
+    const Scalar chord = chart.chord_of_distance(reach);
+    const Scalar chord2 = chord * chord;
+    bin(chart, X, reach, chord);
+    const int chunks = parallel::chunks_for(n);
+    buffers_.resize(static_cast<std::size_t>(chunks));
+    out.offset.assign(static_cast<std::size_t>(n) + 1, 0);
+    parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
+      std::vector<int>& buf = buffers_[static_cast<std::size_t>(c)];
+      buf.clear();
+      std::vector<Box> boxes;
+      std::vector<std::int64_t> prefix(static_cast<std::size_t>(keys_), 0);
+      for (int i = begin; i < end; ++i) {
+        const std::size_t first = buf.size();
+        query_boxes(chart, X, i, reach, boxes);
+        for (const Box& box : boxes) {
+          for_cells_in(box, prefix, [&](int cell) {
+            for (int s = cell_start_[static_cast<std::size_t>(cell)];
+                 s < cell_start_[static_cast<std::size_t>(cell) + 1]; ++s) {
+              const int j = order_[static_cast<std::size_t>(s)];
+              if (j == i) continue;
+              if (chord2_of(chart, X, i, j) < chord2) buf.push_back(j);
+            }
+          });
+        }
+        std::sort(buf.begin() + static_cast<std::ptrdiff_t>(first), buf.end());
+        out.offset[static_cast<std::size_t>(i) + 1] = static_cast<int>(buf.size() - first);
+      }
+    });
+    for (int i = 0; i < n; ++i) out.offset[static_cast<std::size_t>(i) + 1] += out.offset[static_cast<std::size_t>(i)];
+    out.index.resize(static_cast<std::size_t>(out.offset.back()));
+    parallel::for_chunks(n, chunks, [&](int begin, int, int c) {
+      const std::vector<int>& buf = buffers_[static_cast<std::size_t>(c)];
+      std::copy(buf.begin(), buf.end(), out.index.begin() + out.offset[static_cast<std::size_t>(begin)]);
+    });
+  }
+
+  /// The squared chord of bodies i and j in the ambient metric.
+  template <class Matrix>
+  static Scalar chord2_of(const Chart& chart, const Matrix& X, int i, int j) {
+    Scalar c2(0);
+    const int a = static_cast<int>(X.rows());
+    for (int k = 0; k < a; ++k) {
+      const Scalar u = X(k, i) - X(k, j);
+      c2 += u * u;
+    }
+    if (chart.curvature() < Scalar(0)) {  // Minkowski: the last coordinate is time-like
+      const Scalar u = X(a - 1, i) - X(a - 1, j);
+      c2 -= Scalar(2) * u * u;
+    }
+    return c2;
+  }
+
+ private:
+  /// A box of cells: key coordinate k runs over [lo[k], hi[k]].
+  struct Box {
+    std::vector<std::int64_t> lo, hi;
+  };
+
+  static std::int64_t cell_of(Scalar v) {
+    using std::floor;
+    constexpr Scalar limit = Scalar(std::int64_t(1) << 60);
+    const Scalar f = floor(v);
+    if (!(f > -limit)) return -(std::int64_t(1) << 60);  // also NaN: one far cell
+    if (!(f < limit)) return std::int64_t(1) << 60;
+    return static_cast<std::int64_t>(f);
+  }
+
+  /// Cell keys of every body, the bodies sorted by key, and the runs of equal keys.
+  template <class Matrix>
+  void bin(const Chart& chart, const Matrix& X, Scalar reach, Scalar chord) {
+    const int n = static_cast<int>(X.cols());
+    const int a = static_cast<int>(X.rows());
+    if (chart.curvature() < Scalar(0)) {
+      keys_ = a - 1;  // the band, then the n - 1 horizontal coordinates
+      key_.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_), 0);
+      set_half_space(chart, X, reach);
+      parallel::for_each(n, [&](int i) {
+        const Scalar u = half_space(X, i);
+        std::int64_t* k = &key_[static_cast<std::size_t>(i) * static_cast<std::size_t>(keys_)];
+        k[0] = cell_of(u / band_);
+        const Scalar width = box_width(k[0]);
+        for (int d = 1; d < keys_; ++d) k[d] = cell_of(w_(d - 1, i) / width);
+      });
+    } else {
+      keys_ = a;  // the ambient coordinates
+      key_.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_), 0);
+      side_ = chord > Scalar(0) ? chord : Scalar(1);
+      parallel::for_each(n, [&](int i) {
+        std::int64_t* k = &key_[static_cast<std::size_t>(i) * static_cast<std::size_t>(keys_)];
+        for (int d = 0; d < a; ++d) k[d] = cell_of(X(d, i) / side_);
+      });
+    }
+    order_.resize(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) order_[static_cast<std::size_t>(i)] = i;
+    std::sort(order_.begin(), order_.end(), [&](int i, int j) {
+      const int c = compare(key_ptr(i), key_ptr(j));
+      return c != 0 ? c < 0 : i < j;
+    });
+    cell_key_.clear();
+    cell_start_.clear();
+    for (int s = 0; s < n; ++s) {
+      const std::int64_t* k = key_ptr(order_[static_cast<std::size_t>(s)]);
+      if (s == 0 || compare(k, key_ptr(order_[static_cast<std::size_t>(s) - 1])) != 0) {
+        cell_key_.insert(cell_key_.end(), k, k + keys_);
+        cell_start_.push_back(s);
+      }
+    }
+    cell_start_.push_back(n);
+  }
+
+  // ---- H^n: upper half-space coordinates ------------------------------------------------------
+  // With the hyperboloid point (s, t) (s spatial, t = x_n > 0, t^2 - |s|^2 = R^2) and a unit
+  // spatial direction e toward the bodies, y = R^2 / (t + e.s) and w = R P s / (t + e.s), where P
+  // projects onto the spatial directions orthogonal to e. This is the half-space model with its
+  // boundary point at infinity opposite e, so for the bodies t + e.s ~ 2t has no cancellation.
+  // Distances: cosh(d/R) = 1 + (|w - w'|^2 + (y - y')^2) / (2 y y').
+
+  template <class Matrix>
+  void set_half_space(const Chart& chart, const Matrix& X, Scalar reach) {
+    const int a = static_cast<int>(X.rows());
+    const int n = static_cast<int>(X.cols());
+    radius_ = Scalar(1) / std::sqrt(-chart.curvature());
+    // The bodies' direction: the spatial part of their sum (all 0: any axis will do).
+    Eigen::Matrix<Scalar, Eigen::Dynamic, 1> e = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>::Zero(a - 1);
+    for (int i = 0; i < n; ++i) {
+      if (X.col(i).allFinite()) e += X.col(i).head(a - 1) / X(a - 1, i);
+    }
+    if (!(e.norm() > Scalar(0))) {
+      e.setZero();
+      e[0] = Scalar(1);
+    }
+    e.normalize();
+    // An orthonormal basis of e's complement: the Householder reflection taking e to the last
+    // spatial axis maps that complement onto the first a - 2 axes.
+    basis_.resize(a - 1, a - 1);
+    Eigen::Matrix<Scalar, Eigen::Dynamic, 1> v = e;
+    v[a - 2] += e[a - 2] >= Scalar(0) ? Scalar(1) : Scalar(-1);
+    basis_.setIdentity();
+    basis_ -= (Scalar(2) / v.squaredNorm()) * v * v.transpose();  // rows 0..a-3: the complement
+    direction_ = e;
+    band_ = reach;
+    w_.resize(std::max(a - 2, 1), n);
+    height_.resize(static_cast<std::size_t>(n));
+  }
+  /// Body i's half-space coordinates: w into w_.col(i), its height y into height_[i]; returns
+  /// the hyperbolic height u = R log(y / R).
+  template <class Matrix>
+  Scalar half_space(const Matrix& X, int i) {
+    const int a = static_cast<int>(X.rows());
+    Scalar along(0);
+    for (int k = 0; k < a - 1; ++k) along += direction_[k] * X(k, i);
+    const Scalar denom = X(a - 1, i) + along;  // > 0 on the hyperboloid: t > |s|
+    for (int d = 0; d + 2 < a; ++d) {
+      Scalar s(0);
+      for (int k = 0; k < a - 1; ++k) s += basis_(d, k) * X(k, i);
+      w_(d, i) = radius_ * s / denom;
+    }
+    height_[static_cast<std::size_t>(i)] = radius_ * radius_ / denom;
+    return radius_ * std::log(radius_ / denom);
+  }
+  /// The horizontal side of the boxes in band k: hyperbolic width h at the band's bottom.
+  Scalar box_width(std::int64_t band) const {
+    return band_ * std::exp(static_cast<Scalar>(band) * band_ / radius_);
+  }
+
+  // ---- queries ---------------------------------------------------------------------------------
+
+  /// The boxes of cells that may hold a body within distance reach of body i.
+  template <class Matrix>
+  void query_boxes(const Chart& chart, const Matrix&, int i, Scalar reach, std::vector<Box>& boxes) const {
+    const std::int64_t* k = key_ptr(i);
+    if (chart.curvature() >= Scalar(0)) {
+      boxes.resize(1);
+      Box& b = boxes[0];
+      b.lo.assign(k, k + keys_);
+      b.hi.assign(k, k + keys_);
+      for (int d = 0; d < keys_; ++d) {
+        b.lo[static_cast<std::size_t>(d)] -= 1;  // side = chord reach: neighbours are in adjacent cells
+        b.hi[static_cast<std::size_t>(d)] += 1;
+      }
+      return;
+    }
+    using std::cosh;
+    using std::exp;
+    using std::sinh;
+    using std::sqrt;
+    // The hyperbolic ball of radius r about (w, y) is the Euclidean ball about (w, y cosh rho) of
+    // radius y sinh rho (rho = r / R); widened by a relative 1e-6 for the coordinates' round-off.
+    const Scalar r = reach * Scalar(1 + 1e-6) + radius_ * Scalar(1e-12);
+    const Scalar rho = r / radius_;
+    const Scalar y = height_[static_cast<std::size_t>(i)];
+    const Scalar u = radius_ * std::log(y / radius_);
+    const std::int64_t first = cell_of((u - r) / band_), last = cell_of((u + r) / band_);
+    boxes.clear();
+    for (std::int64_t band = first; band <= last; ++band) {
+      const Scalar bottom = radius_ * exp(static_cast<Scalar>(band) * band_ / radius_);
+      const Scalar top = bottom * exp(band_ / radius_);
+      // The widest horizontal section of the ball within this band.
+      const Scalar centre = y * cosh(rho), half = y * sinh(rho);
+      const Scalar nearest = std::clamp(centre, std::max(bottom, y * exp(-rho)), std::min(top, y * exp(rho)));
+      const Scalar off = nearest - centre;
+      const Scalar reach_w = sqrt(std::max(Scalar(0), half * half - off * off)) * Scalar(1 + 1e-6);
+      const Scalar width = box_width(band);
+      Box b;
+      b.lo.assign(static_cast<std::size_t>(keys_), band);
+      b.hi.assign(static_cast<std::size_t>(keys_), band);
+      for (int d = 1; d < keys_; ++d) {
+        const Scalar w = w_(d - 1, i);
+        b.lo[static_cast<std::size_t>(d)] = cell_of((w - reach_w) / width);
+        b.hi[static_cast<std::size_t>(d)] = cell_of((w + reach_w) / width);
+      }
+      boxes.push_back(std::move(b));
+    }
+  }
+
+  /// f(cell) for every occupied cell in box: an odometer over all key coordinates but the last,
+  /// and one binary search per row for the run of the last.
+  template <class F>
+  void for_cells_in(const Box& box, std::vector<std::int64_t>& key, F&& f) const {
+    const int last = keys_ - 1;
+    for (int d = 0; d < keys_; ++d) key[static_cast<std::size_t>(d)] = box.lo[static_cast<std::size_t>(d)];
+    const int cells = static_cast<int>(cell_start_.size()) - 1;
+    while (true) {
+      key[static_cast<std::size_t>(last)] = box.lo[static_cast<std::size_t>(last)];
+      int lo = 0, hi = cells;  // first cell >= key
+      while (lo < hi) {
+        const int mid = (lo + hi) / 2;
+        if (compare(cell_ptr(mid), key.data()) < 0) lo = mid + 1; else hi = mid;
+      }
+      for (int c = lo; c < cells; ++c) {
+        const std::int64_t* k = cell_ptr(c);
+        if (compare_prefix(k, key.data(), last) != 0 || k[last] > box.hi[static_cast<std::size_t>(last)]) break;
+        f(c);
+      }
+      int d = last - 1;  // next row
+      while (d >= 0) {
+        if (++key[static_cast<std::size_t>(d)] <= box.hi[static_cast<std::size_t>(d)]) break;
+        key[static_cast<std::size_t>(d)] = box.lo[static_cast<std::size_t>(d)];
+        --d;
+      }
+      if (d < 0) return;
+    }
+  }
+
+  const std::int64_t* key_ptr(int i) const {
+    return &key_[static_cast<std::size_t>(i) * static_cast<std::size_t>(keys_)];
+  }
+  const std::int64_t* cell_ptr(int c) const {
+    return &cell_key_[static_cast<std::size_t>(c) * static_cast<std::size_t>(keys_)];
+  }
+  int compare(const std::int64_t* a, const std::int64_t* b) const { return compare_prefix(a, b, keys_); }
+  static int compare_prefix(const std::int64_t* a, const std::int64_t* b, int n) {
+    for (int d = 0; d < n; ++d) {
+      if (a[d] != b[d]) return a[d] < b[d] ? -1 : 1;
+    }
+    return 0;
+  }
+
+  int keys_ = 0;
+  std::vector<std::int64_t> key_;       // per body, keys_ each
+  std::vector<int> order_;              // bodies sorted by (key, index)
+  std::vector<std::int64_t> cell_key_;  // per occupied cell, keys_ each, ascending
+  std::vector<int> cell_start_;         // cell c holds order_[cell_start_[c] .. cell_start_[c+1])
+  std::vector<std::vector<int>> buffers_;
+  Scalar side_ = 1;                     // S^n, E^n: the cells' side
+  Scalar radius_ = 1, band_ = 1;  // H^n
+  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> direction_;
+  Points basis_, w_;
+  std::vector<Scalar> height_;
+};
+
+/// A neighbour list with a skin, for one short-range term in one workspace.
+template <class Chart>
+class VerletList {
+ public:
+  using Scalar = typename Chart::Scalar;
+
+  /// The skin as a fraction of the range (LAMMPS' default 0.3 sigma is 0.12 of an LJ cutoff of
+  /// 2.5 sigma). The forces do not depend on it, only the time they take.
+  Scalar skin_fraction = Scalar(0.12);
+
+  /// Lists valid for points X (ambient x bodies) and range: rebuilt when X has a different
+  /// number of bodies, the range changed, or a body moved more than half the skin.
+  template <class Matrix>
+  const NeighbourLists& update(const Chart& chart, const Matrix& X, Scalar range) {
+    const Scalar skin = skin_fraction * range;
+    if (!valid(chart, X, range, skin)) {
+      index_.build(chart, X, range + skin, lists_);
+      built_at_ = X;
+      range_ = range;
+      half_skin_chord2_ = chart.chord_of_distance(skin / Scalar(2));
+      half_skin_chord2_ *= half_skin_chord2_;
+      ++builds_;
+    }
+    return lists_;
+  }
+  /// Rebuilds so far.
+  long builds() const { return builds_; }
+  /// Forget the lists (the next update rebuilds).
+  void clear() { built_at_.resize(0, 0); }
+
+ private:
+  template <class Matrix>
+  bool valid(const Chart& chart, const Matrix& X, Scalar range, Scalar skin) const {
+    if (built_at_.cols() != X.cols() || built_at_.rows() != X.rows() || range != range_ || !(skin > Scalar(0))) {
+      return false;
+    }
+    const int n = static_cast<int>(X.cols());
+    std::vector<char> moved(static_cast<std::size_t>(n), 0);
+    parallel::for_each(n, [&](int i) {
+      Scalar c2(0);
+      const int a = static_cast<int>(X.rows());
+      for (int k = 0; k < a; ++k) {
+        const Scalar u = X(k, i) - built_at_(k, i);
+        c2 += u * u;
+      }
+      if (chart.curvature() < Scalar(0)) {
+        const Scalar u = X(a - 1, i) - built_at_(a - 1, i);
+        c2 -= Scalar(2) * u * u;
+      }
+      moved[static_cast<std::size_t>(i)] = !(c2 <= half_skin_chord2_);  // NaN: rebuild
+    });
+    return std::find(moved.begin(), moved.end(), char(1)) == moved.end();
+  }
+
+  NeighbourIndex<Chart> index_;
+  NeighbourLists lists_;
+  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> built_at_;
+  Scalar range_ = 0, half_skin_chord2_ = 0;
+  long builds_ = 0;
+};
+
+}  // namespace sesi

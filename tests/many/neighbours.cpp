@@ -1,0 +1,256 @@
+// The neighbour index and the pair sums of many bodies (issue #11): the index finds exactly the
+// pairs within reach on S^n, H^n (near the origin and far from it) and E^n; forces through a
+// Verlet list equal the all-pairs rows to the bit; rows and tiles agree with an independent
+// pair sum to round-off; a Verlet list stays right across rebuilds.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include <doctest/doctest.h>
+
+#include <sesi/neighbours.hpp>
+#include <sesi/stepper.hpp>
+
+#include "common.hpp"
+
+namespace {
+
+using namespace manytest;
+constexpr double eps = std::numeric_limits<double>::epsilon();
+
+/// Lists against all pairs by the chart's own distance. A pair within `slack` (relative) of
+/// the reach may fall either way: the chord test and the distance round differently there.
+template <class Chart>
+void check_index(const Chart& chart, const Eigen::MatrixXd& X, double reach, double slack) {
+  sesi::NeighbourIndex<Chart> index;
+  sesi::NeighbourLists lists;
+  index.build(chart, X, reach, lists);
+  const int n = static_cast<int>(X.cols());
+  REQUIRE(lists.bodies() == n);
+  typename Chart::Ambient x(X.rows()), y(X.rows());
+  long missing = 0, extra = 0, unsorted = 0, listed = 0;
+  for (int i = 0; i < n; ++i) {
+    std::set<int> in_list;
+    for (int k = lists.begin(i); k < lists.end(i); ++k) {
+      const int j = lists.index[static_cast<std::size_t>(k)];
+      if (k > lists.begin(i) && !(lists.index[static_cast<std::size_t>(k) - 1] < j)) ++unsorted;
+      in_list.insert(j);
+    }
+    x = X.col(i);
+    for (int j = 0; j < n; ++j) {
+      if (j == i) continue;
+      y = X.col(j);
+      const double d = chart.distance(x, y);
+      const bool listed_ij = in_list.count(j) > 0;
+      listed += listed_ij;
+      if (d < reach * (1 - slack) && !listed_ij) ++missing;
+      if (d > reach * (1 + slack) && listed_ij) ++extra;
+    }
+  }
+  CHECK(missing == 0);
+  CHECK(extra == 0);
+  CHECK(unsorted == 0);
+  CHECK(listed == 2 * lists.pairs());
+  CHECK(lists.pairs() > n / 10);  // the scene is dense enough to test something
+}
+
+}  // namespace
+
+TEST_CASE("the neighbour index finds exactly the pairs within reach") {
+  const int n = 600;
+  SUBCASE("S^2") {
+    const sesi::Sphere<2, double> chart(radius_for(2, n));
+    const auto s = random_state(chart, n, 0, 0, 1, 1);
+    for (double reach : {1.0, 2.5, 7.0}) check_index(chart, points_of(chart, s), reach, 1e-12);
+  }
+  SUBCASE("S^3") {
+    const sesi::Sphere<3, double> chart(radius_for(3, n));
+    const auto s = random_state(chart, n, 0, 0, 1, 2);
+    for (double reach : {1.0, 2.5}) check_index(chart, points_of(chart, s), reach, 1e-12);
+  }
+  SUBCASE("S^5, dynamic size") {
+    const sesi::Sphere<Eigen::Dynamic, double> chart(2.0, 5);
+    const auto s = random_state(chart, 300, 0, 0, 1, 3);
+    check_index(chart, points_of(chart, s), 1.5, 1e-12);
+  }
+  SUBCASE("E^3") {
+    const sesi::Euclidean<3, double> chart;
+    const auto s = random_state(chart, n, 12.0, 0, 1, 4);
+    for (double reach : {1.0, 2.5}) check_index(chart, points_of(chart, s), reach, 1e-12);
+  }
+  SUBCASE("H^2 at the origin, and 10 R away") {
+    // Far out, a point's coordinates are of size R e^10, so a chord of size 1 carries a
+    // relative error of about eps e^20 ~ 1e-7: the slack at the reach.
+    const double R = 3.0;
+    const sesi::Hyperbolic<2, double> chart(R);
+    for (double far : {0.0, 10.0 * R}) {
+      const auto s = random_state(chart, n, 3.0 * R, far, 1, 5);
+      const double slack = far > 0 ? 1e-5 : 1e-12;
+      for (double reach : {1.0, 2.5, 8.0}) check_index(chart, points_of(chart, s), reach, slack);
+    }
+  }
+  SUBCASE("H^3, strongly curved (R = 1)") {
+    const sesi::Hyperbolic<3, double> chart(1.0);
+    const auto s = random_state(chart, 400, 3.0, 4.0, 1, 6);
+    for (double reach : {0.5, 2.0}) check_index(chart, points_of(chart, s), reach, 1e-9);
+  }
+}
+
+namespace {
+
+template <class Chart>
+using LJSystem = sesi::System<Chart, sesi::LennardJones<double>, sesi::CotangentGravity<double>>;
+
+template <class Chart>
+LJSystem<Chart> lj_system(const Chart& chart, int n) {
+  return LJSystem<Chart>(chart, std::vector<double>(static_cast<std::size_t>(n), 1.0),
+                         sesi::LennardJones<double>{1.0, 1.0, 2.5}, sesi::CotangentGravity<double>{1e-3});
+}
+
+/// Chart gradients and energy of s, through the lists or all pairs.
+template <class Chart>
+std::pair<Eigen::MatrixXd, double> gradient_and_energy(LJSystem<Chart>& sys, const sesi::State<Chart>& s,
+                                                        typename LJSystem<Chart>::PairSearch search) {
+  sys.set_pair_search(search);
+  auto w = sys.make_workspace();
+  typename sesi::State<Chart>::Matrix g;
+  sys.potential_gradient(s, w, g);
+  return {g, sys.potential_energy(s, w)};
+}
+
+template <class Chart>
+void check_lists_equal_all_pairs(const Chart& chart, const sesi::State<Chart>& s) {
+  auto sys = lj_system(chart, s.bodies());
+  REQUIRE(sys.by_rows());
+  using Search = typename LJSystem<Chart>::PairSearch;
+  const auto [g_list, e_list] = gradient_and_energy(sys, s, Search::automatic);
+  const auto [g_all, e_all] = gradient_and_energy(sys, s, Search::all_pairs);
+  CHECK(g_list.allFinite());
+  CHECK((g_list.array() == g_all.array()).all());
+  CHECK(e_list == e_all);
+}
+
+}  // namespace
+
+TEST_CASE("forces through the Verlet list equal the all-pairs rows to the bit") {
+  // Both sum each body's pairs in ascending order of the partner, so the sums are the same
+  // floating-point operations in the same order.
+  const int n = 500;
+  SUBCASE("S^2") {
+    const sesi::Sphere<2, double> chart(radius_for(2, n));
+    check_lists_equal_all_pairs(chart, random_state(chart, n, 0, 0, 1, 7));
+  }
+  SUBCASE("H^2 far out") {
+    const sesi::Hyperbolic<2, double> chart(6.0);
+    check_lists_equal_all_pairs(chart, random_state(chart, n, 10.0, 40.0, 1, 8));
+  }
+  SUBCASE("E^3") {
+    const sesi::Euclidean<3, double> chart;
+    check_lists_equal_all_pairs(chart, random_state(chart, n, 10.0, 0, 1, 9));
+  }
+}
+
+namespace {
+
+/// The ambient gradient of every body by a plain double loop over the chart's own distance and
+/// distance gradient, and per body the sum of the contributions' sizes (the scale of its
+/// round-off).
+template <class Chart, class Sys>
+void reference_gradient(const Chart& chart, const Sys& sys, const Eigen::MatrixXd& X, Eigen::MatrixXd& G,
+                        Eigen::VectorXd& scale) {
+  const int n = static_cast<int>(X.cols());
+  G.setZero(X.rows(), n);
+  scale.setZero(n);
+  typename Chart::Ambient x(X.rows()), y(X.rows()), g(X.rows());
+  const auto& [lj, gravity] = sys.terms();
+  for (int i = 0; i < n; ++i) {
+    x = X.col(i);
+    for (int j = 0; j < n; ++j) {
+      if (j == i) continue;
+      y = X.col(j);
+      const double d = chart.distance(x, y);
+      chart.distance_gradient(x, y, g);
+      // Both gradients of the distance cancel terms of the size of the points against a result
+      // of size 1 over a distance d: their round-off is eps (|x|^2 + |y|^2) / (L d), L the
+      // length scale (R; on E^n the points' own size).
+      double length = std::max({1.0, x.norm(), y.norm()});
+      if constexpr (requires { chart.radius(); }) length = chart.radius();
+      const double condition = 1.0 + (x.squaredNorm() + y.squaredNorm()) / (length * d);
+      for (double dw : {lj.derivative(chart, d, 1.0, 1.0), gravity.derivative(chart, d, 1.0, 1.0)}) {
+        G.col(i) += dw * g;
+        scale[i] += std::abs(dw) * condition;
+      }
+    }
+  }
+}
+
+template <class Chart>
+void check_rows_against_reference(const Chart& chart, const sesi::State<Chart>& s) {
+  auto sys = lj_system(chart, s.bodies());
+  REQUIRE(sys.by_rows());
+  auto w = sys.make_workspace();
+  sys.embed_all(s, w);
+  sys.ambient_gradient(w);
+  Eigen::MatrixXd G_ref;
+  Eigen::VectorXd scale;
+  reference_gradient(chart, sys, Eigen::MatrixXd(w.X), G_ref, scale);
+  // Each contribution is a few correctly rounded operations, with the conditioning of the
+  // distance's gradient (reference_gradient): 64 eps per unit of the summed sizes.
+  double worst = 0;
+  for (int i = 0; i < s.bodies(); ++i) {
+    const double err = (Eigen::VectorXd(w.G.col(i)) - G_ref.col(i)).norm();
+    worst = std::max(worst, err / (64 * eps * scale[i]));
+  }
+  CHECK(worst < 1.0);
+}
+
+}  // namespace
+
+TEST_CASE("rows (short range) and tiles (long range) agree with an independent pair sum") {
+  const int n = 300;
+  SUBCASE("S^2") {
+    const sesi::Sphere<2, double> chart(radius_for(2, n));
+    check_rows_against_reference(chart, random_state(chart, n, 0, 0, 1, 10));
+  }
+  SUBCASE("S^3") {
+    const sesi::Sphere<3, double> chart(radius_for(3, n));
+    check_rows_against_reference(chart, random_state(chart, n, 0, 0, 1, 11));
+  }
+  SUBCASE("H^2") {
+    const sesi::Hyperbolic<2, double> chart(4.0);
+    check_rows_against_reference(chart, random_state(chart, n, 8.0, 0.0, 1, 12));
+  }
+  SUBCASE("E^3") {
+    const sesi::Euclidean<3, double> chart;
+    check_rows_against_reference(chart, random_state(chart, n, 9.0, 0, 1, 13));
+  }
+}
+
+TEST_CASE("a Verlet list is rebuilt once a body has moved half its skin, and not before") {
+  const int n = 400;
+  const sesi::Sphere<2, double> chart(radius_for(2, n));
+  const auto s = random_state(chart, n, 0, 0, 1, 14);
+  Eigen::MatrixXd X = points_of(chart, s);
+  sesi::VerletList<sesi::Sphere<2, double>> list;
+  const double range = 2.5, half_skin = list.skin_fraction * range / 2;
+  list.update(chart, X, range);
+  CHECK(list.builds() == 1);
+  // Body 7 moves along a great circle by 0.9 of half the skin: the list stands.
+  const Eigen::Vector3d x0 = X.col(7);
+  Eigen::Vector3d t = Eigen::Vector3d::UnitZ() - (x0.normalized().z()) * x0.normalized();
+  t.normalize();
+  const auto moved = [&](double d) {
+    const double a = d / chart.radius();
+    return Eigen::Vector3d(std::cos(a) * x0 + std::sin(a) * chart.radius() * t);
+  };
+  X.col(7) = moved(0.9 * half_skin);
+  list.update(chart, X, range);
+  CHECK(list.builds() == 1);
+  X.col(7) = moved(1.1 * half_skin);
+  list.update(chart, X, range);
+  CHECK(list.builds() == 2);
+}
+
