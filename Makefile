@@ -7,7 +7,8 @@ JOBS        ?= $(shell nproc)
 # clang and its runtimes (libclang-rt) build the sanitizer job of `make test` and `make fuzz`;
 # libbenchmark-dev the micro-benchmarks (`make microbench`, and a smoke test in `make test`).
 APT_PACKAGES := cmake g++ make libeigen3-dev libboost-dev doctest-dev libtomlplusplus-dev \
-                libcli11-dev python3-matplotlib clang libclang-rt-14-dev libbenchmark-dev
+                libcli11-dev python3-matplotlib clang libclang-rt-14-dev libbenchmark-dev \
+                libhdf5-dev python3-h5py
 
 .PHONY: deps configure build test demo clean fuzz figures microbench
 
@@ -72,3 +73,14 @@ figures: deps
 	$(PYTHON3) tools/figures.py convergence $(BENCH_OUT)/figures docs/figures/convergence.png
 	$(PYTHON3) tools/plot_bench.py $(BENCH_OUT)/paper $(BENCH_OUT)/kepler-s2 $(BENCH_OUT)/kepler-h2 \
 	  --figures docs/figures --markdown | tee $(BENCH_OUT)/report.txt
+	@# Many bodies (issue #11): time per step against N, with the flat references of the same run.
+	$(BENCH_DIR)/src/sesi bench --scaling --space sphere --dim 2 --threads 1,2 --out $(BENCH_OUT)/scaling-s2
+	$(BENCH_DIR)/src/sesi bench --scaling --space sphere --dim 3 --out $(BENCH_OUT)/scaling-s3
+	$(BENCH_DIR)/src/sesi bench --scaling --space hyperbolic --dim 2 --out $(BENCH_OUT)/scaling-h2
+	$(BENCH_DIR)/src/sesi bench --scaling --space hyperbolic --dim 2 --center-distance 10 --out $(BENCH_OUT)/scaling-h2-far
+	$(BENCH_DIR)/src/sesi bench --scaling --potential cotangent-gravity --methods sesi4 --n 1000,3000,10000 \
+	  --out $(BENCH_OUT)/scaling-gravity-s2
+	$(PYTHON3) tools/plot_scaling.py $(BENCH_OUT)/scaling-s2 --figure docs/figures/scaling-s2.png --markdown \
+	  | tee $(BENCH_OUT)/scaling-report.txt
+	$(PYTHON3) tools/plot_scaling.py $(BENCH_OUT)/scaling-s3 $(BENCH_OUT)/scaling-h2 $(BENCH_OUT)/scaling-h2-far \
+	  $(BENCH_OUT)/scaling-gravity-s2 --figure docs/figures/scaling-others.png --markdown | tee -a $(BENCH_OUT)/scaling-report.txt

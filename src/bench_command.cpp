@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "bench_scaling.hpp"
 #include "bench_scenes.hpp"
 #include "bench_types.hpp"
 #include "errors.hpp"
@@ -109,6 +110,26 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
   b->add_option("--figure", o.figure,
                 "Instead of the sweep, the data of a seed figure: seed-fig1 or convergence.")
       ->type_name("NAME");
+  b->add_flag("--scaling", o.scaling,
+              "Instead of the sweep, seconds per step against the number of bodies, with flat references "
+              "(DIR/scaling.csv; options below).");
+  b->add_option("--space", o.space, "--scaling: sphere (default), hyperbolic or euclidean.")->type_name("KIND");
+  b->add_option("--dim", o.dim, "--scaling: dimension of the space (default 2).")->type_name("N");
+  b->add_option("--potential", o.potential, "--scaling: lennard-jones (default) or cotangent-gravity.")
+      ->type_name("KIND");
+  b->add_option("--n", o.sizes, "--scaling: comma-separated body counts (default 1000,3000,10000,30000,100000).")
+      ->type_name("LIST");
+  b->add_option("--threads,-j", o.threads, "--scaling: comma-separated thread counts (default: all cores).")
+      ->type_name("LIST");
+  b->add_option("--steps", o.steps, "--scaling: timed steps per point (default: about a second's worth, at least 40; gravity 4).")->type_name("N");
+  b->add_option("--check-every", o.check_every,
+                "--scaling: steps between the runs' checks (default: sesi run's default cadence).")
+      ->type_name("N");
+  b->add_option("--skin", o.skin, "--scaling: the runs' neighbour_skin (default 0.12; 0: lists rebuilt every step).")
+      ->type_name("S");
+  b->add_option("--center-distance", o.center_distance,
+                "--scaling on H^n: the cluster's centre this many radii from the chart origin (default 0).")
+      ->type_name("D");
   std::string footer = "\nMETHODS:";
   for (const bench::MethodSpec& m : bench::all_methods()) footer += " " + std::string(m.name);
   footer +=
@@ -116,7 +137,12 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
       "force_evals, wall_seconds (minimum of the repeats, no observer), final_error (largest\n"
       "geodesic distance from the reference position at t_end), max_energy_error and\n"
       "max_momentum_drift (over 1000 common sample times); '#' lines state the reference.\n"
-      "Plots: /usr/bin/python3 tools/plot_bench.py DIR (docs/benchmarks.md).\n";
+      "Plots: /usr/bin/python3 tools/plot_bench.py DIR (docs/benchmarks.md).\n"
+      "With --scaling: DIR/scaling.csv (default DIR sesi-out/bench/scaling), one row per point:\n"
+      "n_bodies, space, dim, potential, method, threads, seconds_per_step, pairs_per_step,\n"
+      "ns_per_pair, peak_rss_mb; rows 'euclidean 3' (sesi on flat E^3, same N and density) and\n"
+      "'flat-periodic' (a plain 3-D cell-list loop) are the references. --methods takes sesi run's\n"
+      "methods there (default sesi2). Plot: /usr/bin/python3 tools/plot_scaling.py DIR.\n";
   b->footer(footer);
   return b;
 }
@@ -172,6 +198,7 @@ void write_csv(const std::string& path, const bench::Settings& s, const bench::R
 }  // namespace
 
 int bench_command(const BenchOptions& o) {
+  if (o.scaling) return bench::scaling_command(o);
   bench::Settings s;
   s.quick = o.quick;
   s.repeats = o.repeats > 0 ? o.repeats : (o.quick ? 1 : 3);

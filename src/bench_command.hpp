@@ -20,6 +20,18 @@ struct BenchOptions {
   int repeats = 0;              ///< 0: 3 (1 with --quick)
   std::string figure;           ///< seed-fig1 | convergence (data of the seed's figures)
   std::string form;             ///< seed | program (empty: the scene's, docs/benchmarks.md)
+
+  // --scaling (issue #11): time per step against the number of bodies (bench_scaling.hpp).
+  bool scaling = false;
+  std::string space = "sphere";            ///< sphere | hyperbolic | euclidean
+  int dim = 2;
+  std::string potential = "lennard-jones";  ///< lennard-jones | cotangent-gravity
+  std::string sizes;                       ///< comma-separated body counts (empty: the default)
+  std::string threads;                     ///< comma-separated thread counts (empty: all cores)
+  long steps = 0;                          ///< timed steps per point (0: the default)
+  double center_distance = 0;              ///< H^n: the cluster's centre, in radii from the origin
+  long check_every = 0;                    ///< the runs' check cadence (0: sesi run's default)
+  double skin = 0.12;                      ///< the runs' neighbour_skin
 };
 
 /// Add the `bench` subcommand to app, parsing into options.

@@ -31,10 +31,11 @@ std::string run_footer() {
       "                 \"central-cotangent\" (k, center), \"harmonic-pair\" (k, d0),\n"
       "                 \"lennard-jones\" (epsilon, sigma, cutoff); singular terms also min_distance\n"
       "  [integrator]   method, dt, t_end, output_every, energy_guard, threads, check_every,\n"
-      "                 trajectory_format\n"
+      "                 neighbour_skin, trajectory_format\n"
       "  Without SCENE: the seed paper's three bodies on S^2 with sesi4, dt = 0.1, t_end = 800.\n"
       "\nOUTPUTS (in DIR, replaced as a whole when the run ends):\n"
       "  trajectory.csv   t, then per body b: b<b>_q<i>, b<b>_p<i>, b<b>_x<i>\n"
+      "  trajectory.h5    instead, with trajectory_format h5md: the same numbers as H5MD\n"
       "  diagnostics.csv  t, energy, energy_error, momentum-map components\n"
       "  exact.csv        exact positions (scenes with an exact solution: the default scene)\n"
       "  summary.json     settings, energy and momentum-map errors, final state, wall time\n"
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
   std::string method;
   double dt = 0.0, t_end = 0.0;
   long output_every = 0, threads = 0, check_every = 0;
+  double neighbour_skin = 0;
   std::string trajectory_format;
   CLI::App* run = app.add_subcommand("run", "Run a scene and write its trajectory, diagnostics and summary.");
   run->add_option("SCENE", options.scene_path,
@@ -88,6 +90,10 @@ int main(int argc, char** argv) {
   auto* check_opt = run->add_option("--check-every", check_every,
                                     "Steps between energy and encounter checks, >= 1 (output rows are always checked).")
                         ->type_name("N");
+  auto* skin_opt = run->add_option("--neighbour-skin", neighbour_skin,
+                                   "Verlet-list skin of cutoff terms, a fraction of the cutoff from 0 to 1 (default "
+                                   "0.12; 0: rebuilt every evaluation).")
+                       ->type_name("S");
   auto* format_opt =
       run->add_option("--trajectory-format", trajectory_format, "Trajectory format: csv or h5md.")->type_name("F");
   run->add_flag("--quiet,-q", options.quiet, "No report on stdout and no progress bar.");
@@ -109,6 +115,7 @@ int main(int argc, char** argv) {
   if (threads_opt->count() > 0) options.threads = threads;
   if (check_opt->count() > 0) options.check_every = check_every;
   if (format_opt->count() > 0) options.trajectory_format = trajectory_format;
+  if (skin_opt->count() > 0) options.neighbour_skin = neighbour_skin;
 
   try {
     if (bench->parsed()) return bench_command(bench_options);

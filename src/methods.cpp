@@ -1,5 +1,6 @@
 #include "methods.hpp"
 
+#include <algorithm>
 #include <array>
 
 namespace sesi::program {
@@ -7,7 +8,7 @@ namespace sesi::program {
 namespace {
 template <class... Method>
 constexpr auto catalogue_of(MethodList<Method...>) {
-  return std::array<MethodInfo, sizeof...(Method)>{MethodInfo{Method::name, Method::order, Method::about}...};
+  return std::array<MethodInfo, sizeof...(Method)>{MethodInfo{Method::name, Method::order, Method::about, Method::stages}...};
 }
 template <class... Method>
 constexpr auto names_of(MethodList<Method...>) {
@@ -21,6 +22,12 @@ std::span<const MethodInfo> method_catalogue() { return catalogue; }
 std::span<const std::string_view> method_names() { return names; }
 bool is_method(std::string_view name) {
   return std::find(names.begin(), names.end(), name) != names.end();
+}
+const MethodInfo* find_method_info(std::string_view name) {
+  for (const MethodInfo& m : catalogue) {
+    if (m.name == name) return &m;
+  }
+  return nullptr;
 }
 
 }  // namespace sesi::program

@@ -102,6 +102,7 @@ template <class Table, Text About>
 struct CompositionMethod {
   static constexpr std::string_view name = Table::name;
   static constexpr int order = Table::order;
+  static constexpr int stages = Table::stages;  // force evaluations per step (kick-drift-kick, FSAL)
   static constexpr std::string_view about = About.view();
   template <class Sys>
   static std::unique_ptr<AnyStepper<Sys>> make(const Sys& sys) {
@@ -131,6 +132,7 @@ struct MethodInfo {
   std::string_view name;
   int order;
   std::string_view about;
+  int stages;  ///< force evaluations per step
 };
 
 /// All registered methods, in registration order.
@@ -139,6 +141,8 @@ std::span<const MethodInfo> method_catalogue();
 std::span<const std::string_view> method_names();
 /// Is name a registered method?
 bool is_method(std::string_view name);
+/// The method called name, or null.
+const MethodInfo* find_method_info(std::string_view name);
 
 namespace detail {
 template <class Sys, class... Method>

@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 namespace {
 /// Files sesi (and tools/plot_run.py) put into an output directory.
 bool is_sesi_output(const fs::directory_entry& entry) {
-  static constexpr std::array<std::string_view, 4> names = {"trajectory.csv", "diagnostics.csv",
+  static constexpr std::array<std::string_view, 5> names = {"trajectory.csv", "trajectory.h5", "diagnostics.csv",
                                                             "exact.csv", "summary.json"};
   static constexpr std::array<std::string_view, 3> plots = {".png", ".pdf", ".svg"};
   std::error_code ec;

@@ -7,8 +7,8 @@
 /// hidden staging directory, never a file that looks finished.
 ///
 /// An existing output directory is replaced only if it holds nothing but sesi outputs
-/// (trajectory.csv, diagnostics.csv, exact.csv, summary.json and plots *.png, *.pdf, *.svg), so a
-/// mistyped --out never deletes other files.
+/// (trajectory.csv, trajectory.h5, diagnostics.csv, exact.csv, summary.json and plots *.png,
+/// *.pdf, *.svg), so a mistyped --out never deletes other files.
 
 #include <filesystem>
 #include <string>

@@ -8,6 +8,9 @@
 
 #include "exact_track.hpp"
 #include "validate.hpp"
+#ifdef SESI_HAVE_HDF5
+#include "h5md_writer.hpp"
+#endif
 
 namespace sesi::program {
 
@@ -57,10 +60,17 @@ std::vector<std::string> momentum_names(int ambient_dim, bool translations) {
 }
 
 Recorder::Recorder(const Scene& scene, std::filesystem::path dir, std::vector<std::string> momentum_names)
-    : scene_(scene),
-      dir_(std::move(dir)),
-      trajectory_(dir_ / "trajectory.csv", trajectory_header(scene)),
-      diagnostics_(dir_ / "diagnostics.csv", diagnostics_header(momentum_names)) {
+    : scene_(scene), dir_(std::move(dir)), diagnostics_(dir_ / "diagnostics.csv", diagnostics_header(momentum_names)) {
+  if (scene.integrator.trajectory_format == TrajectoryFormat::h5md) {
+#ifdef SESI_HAVE_HDF5
+    trajectory_h5md_ = std::make_unique<H5mdWriter>(dir_ / "trajectory.h5", scene);
+#else
+    // parse_trajectory_format refuses "h5md" in a build without HDF5.
+    throw std::logic_error("trajectory_format h5md in a build without HDF5");
+#endif
+  } else {
+    trajectory_csv_.emplace(dir_ / "trajectory.csv", trajectory_header(scene));
+  }
   stats_.momentum_names = std::move(momentum_names);
   if (scene.exact == ExactSolution::paper) {
     exact_ = std::make_unique<ExactTrack>(dir_ / "exact.csv", scene.body_count());
@@ -89,13 +99,18 @@ void Recorder::track(double energy, const Eigen::VectorXd& momentum) {
 }
 
 void Recorder::write_row(const Snapshot& s) {
-  row_.assign(1, s.t);
-  for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
-    row_.insert(row_.end(), s.q.col(b).data(), s.q.col(b).data() + s.q.rows());
-    row_.insert(row_.end(), s.p.col(b).data(), s.p.col(b).data() + s.p.rows());
-    row_.insert(row_.end(), s.x.col(b).data(), s.x.col(b).data() + s.x.rows());
+  if (trajectory_csv_) {
+    row_.assign(1, s.t);
+    for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
+      row_.insert(row_.end(), s.q.col(b).data(), s.q.col(b).data() + s.q.rows());
+      row_.insert(row_.end(), s.p.col(b).data(), s.p.col(b).data() + s.p.rows());
+      row_.insert(row_.end(), s.x.col(b).data(), s.x.col(b).data() + s.x.rows());
+    }
+    trajectory_csv_->row(row_);
   }
-  trajectory_.row(row_);
+#ifdef SESI_HAVE_HDF5
+  if (trajectory_h5md_) trajectory_h5md_->write(s);
+#endif
   row_.assign({s.t, s.energy, s.energy - stats_.energy_initial});
   row_.insert(row_.end(), s.momentum.data(), s.momentum.data() + s.momentum.size());
   diagnostics_.row(row_);
@@ -109,7 +124,10 @@ std::vector<double> Recorder::max_exact_error() const {
 }
 
 void Recorder::finish(const RunOutcome& outcome, double wall_seconds) {
-  trajectory_.close();
+  if (trajectory_csv_) trajectory_csv_->close();
+#ifdef SESI_HAVE_HDF5
+  if (trajectory_h5md_) trajectory_h5md_->close();
+#endif
   diagnostics_.close();
   ExactStats exact;
   if (exact_) {

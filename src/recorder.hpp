@@ -1,15 +1,18 @@
 #pragma once
 /// @file recorder.hpp
 /// The outputs of a run, written into the (staging) output directory:
-///   trajectory.csv  t, then per body b: chart q, momenta p, embedding x
+///   trajectory.csv  t, then per body b: chart q, momenta p, embedding x (trajectory_format csv)
+///   trajectory.h5   the same numbers as H5MD 1.1 (trajectory_format h5md; h5md_writer.hpp)
 ///   diagnostics.csv t, energy, energy error, momentum-map components
 ///   exact.csv       t, then per body the exact embedding point (scenes with an exact solution)
 ///   summary.json    method, step, energy and momentum-map statistics, final state, ...
 /// Rows are written every output_every steps (and at the first and last step); the energy and
-/// momentum-map maxima of the summary are taken over every step.
+/// momentum-map maxima of the summary are taken over the checked steps (every check_every steps
+/// and every output row, run_loop.cpp), not over every step.
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +26,7 @@
 namespace sesi::program {
 
 class ExactTrack;
+class H5mdWriter;
 
 /// Names of the momentum-map components, in sesi::momentum_map's order: P1..Pn on E^n, then
 /// M1_2, M1_3, ... (1-based ambient indices a < b) of M = sum m (x v^T - v x^T).
@@ -30,18 +34,18 @@ std::vector<std::string> momentum_names(int ambient_dim, bool translations);
 
 class Recorder {
  public:
-  /// Opens the CSV files in dir and writes their headers.
+  /// Opens the output files in dir and writes their headers.
   /// @param momentum_names names of the momentum-map components (sesi::momentum_map's order)
   Recorder(const Scene& scene, std::filesystem::path dir, std::vector<std::string> momentum_names);
   ~Recorder();
 
-  /// Every step, from the initial state on: conserved quantities for the summary's maxima.
+  /// Every checked step, from the initial state on: conserved quantities for the summary's maxima.
   void track(double energy, const Eigen::VectorXd& momentum);
   /// One output row (trajectory, diagnostics, exact).
   void write_row(const Snapshot& s);
   /// The last finite state of the run, with velocities (for the summary's final state).
   void set_final(Snapshot last);
-  /// Closes the CSV files and writes summary.json.
+  /// Closes the trajectory and CSV files and writes summary.json.
   void finish(const RunOutcome& outcome, double wall_seconds);
 
   const InvariantStats& invariants() const { return stats_; }
@@ -51,7 +55,11 @@ class Recorder {
  private:
   const Scene& scene_;
   std::filesystem::path dir_;
-  CsvWriter trajectory_, diagnostics_;
+  std::optional<CsvWriter> trajectory_csv_;  ///< trajectory_format csv
+#ifdef SESI_HAVE_HDF5
+  std::unique_ptr<H5mdWriter> trajectory_h5md_;  ///< trajectory_format h5md
+#endif
+  CsvWriter diagnostics_;
   std::unique_ptr<ExactTrack> exact_;
   std::vector<double> row_;
   bool tracking_ = false;

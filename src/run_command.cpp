@@ -75,6 +75,10 @@ void apply_overrides(Scene& scene, const RunOptions& options) {
     check_check_every(*options.check_every, option, "--check-every");
     in.check_every = *options.check_every;
   }
+  if (options.neighbour_skin) {
+    check_neighbour_skin(*options.neighbour_skin, option, "--neighbour-skin");
+    in.neighbour_skin = *options.neighbour_skin;
+  }
   if (options.trajectory_format) {
     in.trajectory_format = parse_trajectory_format(*options.trajectory_format, option, "--trajectory-format");
   }
@@ -131,7 +135,7 @@ int run_command(const RunOptions& options) {
   sesi::parallel::set_threads(scene.integrator.threads);
   const auto integrator = make_integrator(scene);
   const auto start = std::chrono::steady_clock::now();
-  const RunOutcome outcome = run_loop(scene, *integrator, recorder, RunControl{&interrupted, &progress});
+  const RunOutcome outcome = run_loop(scene, *integrator, recorder, RunControl{&interrupted, &progress, {}});
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish();
   recorder.finish(outcome, wall);

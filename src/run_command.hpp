@@ -18,6 +18,7 @@ struct RunOptions {
   std::optional<long> output_every;
   std::optional<long> threads;
   std::optional<long> check_every;
+  std::optional<double> neighbour_skin;
   std::optional<std::string> trajectory_format;
   bool quiet = false;
 };

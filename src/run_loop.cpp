@@ -201,6 +201,7 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& record
       std::swap(good, s);
     }
     if (control.progress) control.progress->update(k, schedule.time(k));
+    if (control.after_step) control.after_step(k);
   }
   // The outputs end at the last state known good: a row if it is not one yet, and the summary's
   // final state.

@@ -4,6 +4,7 @@
 /// that everything after the loop is compiled once, not once per (space, dimension).
 
 #include <atomic>
+#include <functional>
 #include <string>
 
 #include <Eigen/Core>
@@ -39,6 +40,9 @@ struct RunOutcome {
 struct RunControl {
   const std::atomic<bool>* interrupted = nullptr;  ///< set by SIGINT/SIGTERM
   ProgressBar* progress = nullptr;
+  /// Called after each step k that passed its checks (after its output row, if any); for
+  /// `sesi bench --scaling`, which times a window of steps inside one run.
+  std::function<void(long k)> after_step;
 };
 
 /// "completed", "non-finite state", "invariant failed", "interrupted", "energy error exceeded",

@@ -80,6 +80,9 @@ struct IntegratorSpec {
   /// Steps between the energy, momentum, guard and close-encounter checks (output rows are
   /// always checked); 0: the default, default_check_every(body count) (run_loop.cpp).
   long check_every = 0;
+  /// Skin of the short-range terms' Verlet lists, a fraction of each term's cutoff (0: lists
+  /// rebuilt every force evaluation); only the run time depends on it (System::set_neighbour_skin).
+  double neighbour_skin = 0.12;
   /// Format of the trajectory: csv (trajectory.csv) or h5md (trajectory.h5, H5MD 1.1).
   TrajectoryFormat trajectory_format = TrajectoryFormat::csv;
   int line = 0;  ///< line of [integrator] in the scene file (0: none), for messages

@@ -559,7 +559,7 @@ class SceneReader {
     scene_.integrator.line = in.origin().line;
     static constexpr std::array keys = {"method"sv,       "dt"sv,          "t_end"sv,
                                         "output_every"sv, "energy_guard"sv, "threads"sv,
-                                        "check_every"sv,  "trajectory_format"sv};
+                                        "check_every"sv,  "trajectory_format"sv, "neighbour_skin"sv};
     in.allow_only(keys, "[integrator]");
     IntegratorSpec& spec = scene_.integrator;
     if (in.has("method")) {
@@ -586,6 +586,10 @@ class SceneReader {
     if (in.has("check_every")) {
       spec.check_every = in.integer("check_every", "an integer >= 1");
       check_check_every(spec.check_every, in.origin_of("check_every"), in.key_path("check_every"));
+    }
+    if (in.has("neighbour_skin")) {
+      spec.neighbour_skin = in.number("neighbour_skin", "a number from 0 to 1");
+      check_neighbour_skin(spec.neighbour_skin, in.origin_of("neighbour_skin"), in.key_path("neighbour_skin"));
     }
     if (in.has("trajectory_format")) {
       spec.trajectory_format = parse_trajectory_format(in.string("trajectory_format", "\"csv\" or \"h5md\""),

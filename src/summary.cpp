@@ -61,6 +61,8 @@ std::string summary_json(const SummaryData& d) {
   json.integer("planned_steps", d.planned_steps);
   json.number("t_end", *scene.integrator.t_end);
   json.integer("output_every", scene.integrator.output_every);
+  json.string("trajectory", scene.integrator.trajectory_format == TrajectoryFormat::h5md ? "trajectory.h5"
+                                                                                          : "trajectory.csv");
   json.number("wall_seconds", d.wall_seconds);
 
   json.begin_object("energy");

@@ -191,8 +191,10 @@ SystemOf<Chart> make_system(const Scene& scene, const Chart& chart) {
   add_terms(scene, chords, pairs, short_pairs, externals);
   std::vector<double> masses;
   for (const Body& b : scene.bodies) masses.push_back(b.mass);
-  return SystemOf<Chart>(chart, std::move(masses), std::move(chords), std::move(pairs),
-                         std::move(short_pairs), std::move(externals));
+  SystemOf<Chart> system(chart, std::move(masses), std::move(chords), std::move(pairs), std::move(short_pairs),
+                         std::move(externals));
+  system.set_neighbour_skin(scene.integrator.neighbour_skin);
+  return system;
 }
 
 }  // namespace sesi::program

@@ -55,6 +55,14 @@ void check_check_every(long check_every, const Origin& origin, std::string_view 
   }
 }
 
+void check_neighbour_skin(double skin, const Origin& origin, std::string_view key) {
+  if (!(skin >= 0.0 && skin <= 1.0)) {
+    throw InputError(origin, key,
+                     "expected a number from 0 to 1 (the Verlet skin as a fraction of the cutoff), got " +
+                         format_number(skin));
+  }
+}
+
 TrajectoryFormat parse_trajectory_format(std::string_view name, const Origin& origin, std::string_view key) {
   if (name == "csv") return TrajectoryFormat::csv;
   if (name == "h5md") {

@@ -3,7 +3,8 @@
 
     python3 tools/plot_run.py DIR [--body N] [--out FILE]
 
-Left: the XY projection (embedding coordinates x1, x2) of body N's trajectory, over the exact
+Left: the XY projection (embedding coordinates x1, x2) of body N's trajectory (trajectory.csv,
+or trajectory.h5 with h5py), over the exact
 curve when the run has one (exact.csv; the seed's scene: the six-petal orbit of
 sesi::scenes::paper::Exact). Right: the energy error E(t) - E(0) against time. Writes
 DIR/plot.png unless --out says otherwise. Needs matplotlib (Debian: python3-matplotlib).
@@ -26,6 +27,22 @@ def read_columns(path):
     return columns
 
 
+def read_h5md_body(path, body):
+    """t and body's embedding columns (b<body>_x<i>) of an H5MD trajectory (docs/scene-format.md)."""
+    try:
+        import h5py
+    except ImportError:
+        sys.exit("plot_run.py: reading trajectory.h5 needs h5py (Debian: apt-get install python3-h5py)")
+    with h5py.File(path, "r") as f:
+        position = f["particles/all/position"]
+        columns = {"t": list(position["time"][:])}
+        if body <= position["value"].shape[1]:
+            x = position["value"][:, body - 1, :]
+            for i in range(x.shape[1]):
+                columns[f"b{body}_x{i + 1}"] = list(x[:, i])
+    return columns
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("dir", type=pathlib.Path, help="output directory of sesi run")
@@ -42,11 +59,13 @@ def main():
         return 1
 
     summary = json.loads((args.dir / "summary.json").read_text())
-    trajectory = read_columns(args.dir / "trajectory.csv")
+    h5md = not (args.dir / "trajectory.csv").exists() and (args.dir / "trajectory.h5").exists()
+    trajectory = (read_h5md_body(args.dir / "trajectory.h5", args.body) if h5md
+                  else read_columns(args.dir / "trajectory.csv"))
     diagnostics = read_columns(args.dir / "diagnostics.csv")
     b = f"b{args.body}_"
     if b + "x1" not in trajectory:
-        print(f"plot_run.py: no body {args.body} in {args.dir / 'trajectory.csv'}", file=sys.stderr)
+        print(f"plot_run.py: no body {args.body} in {args.dir}", file=sys.stderr)
         return 1
 
     figure, (orbit, energy) = plt.subplots(1, 2, figsize=(12, 5.5))

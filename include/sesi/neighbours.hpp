@@ -349,7 +349,8 @@ class VerletList {
   Scalar skin_fraction = Scalar(0.12);
 
   /// Lists valid for points X (ambient x bodies) and range: rebuilt when X has a different
-  /// number of bodies, the range changed, or a body moved more than half the skin.
+  /// number of bodies, the range or the skin changed, or a body moved more than half the skin
+  /// (with no skin, at every update).
   template <class Matrix>
   const NeighbourLists& update(const Chart& chart, const Matrix& X, Scalar range) {
     const Scalar skin = skin_fraction * range;
@@ -357,6 +358,7 @@ class VerletList {
       index_.build(chart, X, range + skin, lists_);
       built_at_ = X;
       range_ = range;
+      skin_ = skin;
       half_skin_chord2_ = chart.chord_of_distance(skin / Scalar(2));
       half_skin_chord2_ *= half_skin_chord2_;
       ++builds_;
@@ -371,7 +373,8 @@ class VerletList {
  private:
   template <class Matrix>
   bool valid(const Chart& chart, const Matrix& X, Scalar range, Scalar skin) const {
-    if (built_at_.cols() != X.cols() || built_at_.rows() != X.rows() || range != range_ || !(skin > Scalar(0))) {
+    if (built_at_.cols() != X.cols() || built_at_.rows() != X.rows() || range != range_ || skin != skin_ ||
+        !(skin > Scalar(0))) {
       return false;
     }
     const int n = static_cast<int>(X.cols());
@@ -395,7 +398,7 @@ class VerletList {
   NeighbourIndex<Chart> index_;
   NeighbourLists lists_;
   Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> built_at_;
-  Scalar range_ = 0, half_skin_chord2_ = 0;
+  Scalar range_ = 0, skin_ = 0, half_skin_chord2_ = 0;
   long builds_ = 0;
 };
 

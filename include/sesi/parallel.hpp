@@ -55,22 +55,11 @@ inline constexpr bool available() {
 #endif
 }
 
-/// f(begin, end, chunk) over `chunks` contiguous, equal ranges of [0, n) (chunk = 0..chunks-1),
-/// on up to threads() threads. An exception thrown by f (an invariant check's handler, say) is
-/// rethrown after the loop: the one from the lowest chunk, so even failures do not depend on the
-/// thread count.
+namespace detail {
+/// The threaded part of for_chunks (chunks >= 2), apart so that the serial path stays small
+/// enough to be inlined: a three-body step must not pay for the thread machinery.
 template <class F>
-void for_chunks(int n, int chunks, F&& f) {
-  if (n <= 0) return;
-  chunks = std::max(1, std::min(chunks, n));
-  const auto range = [&](int c, int& begin, int& end) {
-    begin = static_cast<int>(static_cast<long long>(n) * c / chunks);
-    end = static_cast<int>(static_cast<long long>(n) * (c + 1) / chunks);
-  };
-  if (chunks == 1) {
-    f(0, n, 0);
-    return;
-  }
+void for_chunks_on_threads(int n, int chunks, F& f) {
   std::exception_ptr failure;
   int failed_chunk = chunks;
   std::mutex guard;
@@ -78,8 +67,8 @@ void for_chunks(int n, int chunks, F&& f) {
 #pragma omp parallel for schedule(static, 1) num_threads(std::min(chunks, threads()))
 #endif
   for (int c = 0; c < chunks; ++c) {
-    int begin = 0, end = 0;
-    range(c, begin, end);
+    const int begin = static_cast<int>(static_cast<long long>(n) * c / chunks);
+    const int end = static_cast<int>(static_cast<long long>(n) * (c + 1) / chunks);
     try {
       f(begin, end, c);
     } catch (...) {
@@ -92,6 +81,22 @@ void for_chunks(int n, int chunks, F&& f) {
   }
   if (failure) std::rethrow_exception(failure);
 }
+}  // namespace detail
+
+/// f(begin, end, chunk) over `chunks` contiguous, equal ranges of [0, n) (chunk = 0..chunks-1),
+/// on up to threads() threads. An exception thrown by f (an invariant check's handler, say) is
+/// rethrown after the loop: the one from the lowest chunk, so even failures do not depend on the
+/// thread count.
+template <class F>
+void for_chunks(int n, int chunks, F&& f) {
+  if (n <= 0) return;
+  chunks = std::max(1, std::min(chunks, n));
+  if (chunks == 1) {
+    f(0, n, 0);
+    return;
+  }
+  detail::for_chunks_on_threads(n, chunks, f);
+}
 
 /// The number of chunks for a loop over n bodies: one per thread above min_parallel_bodies.
 inline int chunks_for(int n) { return n >= min_parallel_bodies ? threads() : 1; }
@@ -99,6 +104,10 @@ inline int chunks_for(int n) { return n >= min_parallel_bodies ? threads() : 1; 
 /// f(i) for i in [0, n), in parallel above min_parallel_bodies. f must write only to i's own data.
 template <class F>
 void for_each(int n, F&& f) {
+  if (n < min_parallel_bodies) {
+    for (int i = 0; i < n; ++i) f(i);
+    return;
+  }
   for_chunks(n, chunks_for(n), [&](int begin, int end, int) {
     for (int i = begin; i < end; ++i) f(i);
   });

@@ -137,6 +137,16 @@ class Composition {
   /// on threads for many bodies (each body's flows touch only its own data).
   template <class Sys, class F>
   void each_body(const Sys& sys, state_type& x, F&& f) {
+    if (sys.bodies() < parallel::min_parallel_bodies) {  // the workspace's own q, p: no chunks
+      for (int b = 0; b < sys.bodies(); ++b) {
+        ws_.q = x.q.col(b);
+        ws_.p = x.p.col(b);
+        f(b, sys.mass(b), ws_);
+        x.q.col(b) = ws_.q;
+        x.p.col(b) = ws_.p;
+      }
+      return;
+    }
     sys.for_bodies(ws_, [&](int b, auto& sc) {
       sc.q = x.q.col(b);
       sc.p = x.p.col(b);

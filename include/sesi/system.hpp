@@ -153,6 +153,11 @@ class System {
   enum class PairSearch { automatic, all_pairs };
   void set_pair_search(PairSearch search) { pair_search_ = search; }
   PairSearch pair_search() const { return pair_search_; }
+  /// The skin of the short-range terms' Verlet lists, as a fraction of each term's range
+  /// (VerletList::skin_fraction, default 0.12); 0 rebuilds the lists at every evaluation. The
+  /// forces do not depend on it, only the time they take (docs/benchmarks.md, "Skin").
+  void set_neighbour_skin(Scalar fraction) { neighbour_skin_ = fraction; }
+  Scalar neighbour_skin() const { return neighbour_skin_; }
   static constexpr int rows_from = parallel::min_parallel_bodies;
   bool by_rows() const { return bodies() >= rows_from; }
 
@@ -198,6 +203,10 @@ class System {
     const int n = bodies();
     const int chunks = parallel::chunks_for(n);
     w.ensure_scratch(chunks, dim(), ambient_dim());
+    if (chunks == 1) {  // few bodies: a plain loop the compiler can inline
+      for (int b = 0; b < n; ++b) f(b, w.scratch.front());
+      return;
+    }
     parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
       typename Workspace::Scratch& sc = w.scratch[static_cast<std::size_t>(c)];
       for (int b = begin; b < end; ++b) f(b, sc);
@@ -341,7 +350,9 @@ class System {
     if constexpr (ShortRangeTerm<Term, Chart> && HasChordMetric<Chart> && HasPairGeometry<Chart>) {
       if (pair_search_ == PairSearch::automatic) {
         if (static_cast<int>(w.verlet.size()) <= index) w.verlet.resize(static_cast<std::size_t>(index) + 1);
-        return &w.verlet[static_cast<std::size_t>(index)].update(chart_, w.X, term.range(chart_));
+        VerletList<Chart>& list = w.verlet[static_cast<std::size_t>(index)];
+        list.skin_fraction = neighbour_skin_;
+        return &list.update(chart_, w.X, term.range(chart_));
       }
     }
     static_cast<void>(term);
@@ -660,6 +671,7 @@ class System {
   std::vector<Scalar> masses_;
   std::tuple<Terms...> terms_;
   PairSearch pair_search_ = PairSearch::automatic;
+  Scalar neighbour_skin_ = Scalar(0.12);
 };
 
 /// Deduction guide: System(chart, masses, terms...).

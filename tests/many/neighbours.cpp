@@ -254,3 +254,33 @@ TEST_CASE("a Verlet list is rebuilt once a body has moved half its skin, and not
   CHECK(list.builds() == 2);
 }
 
+
+TEST_CASE("the skin changes when the lists are rebuilt, not the forces") {
+  const int n = 400;
+  const sesi::Sphere<2, double> chart(radius_for(2, n));
+  const auto s = random_state(chart, n, 0, 0, 1, 15);
+  // A list built with a wide skin and then asked for a narrow one must rebuild: its half-skin
+  // test would otherwise let bodies move further than the narrow list covers.
+  const Eigen::MatrixXd X = points_of(chart, s);
+  sesi::VerletList<sesi::Sphere<2, double>> list;
+  list.skin_fraction = 0.3;
+  list.update(chart, X, 2.5);
+  list.skin_fraction = 0.1;
+  list.update(chart, X, 2.5);
+  CHECK(list.builds() == 2);
+  // No skin: rebuilt at every update, even where nothing moved.
+  list.skin_fraction = 0;
+  list.update(chart, X, 2.5);
+  list.update(chart, X, 2.5);
+  CHECK(list.builds() == 4);
+  // Forces and energy through lists of any skin equal the all-pairs rows to the bit.
+  auto sys = lj_system(chart, n);
+  using Search = LJSystem<sesi::Sphere<2, double>>::PairSearch;
+  const auto [g_all, e_all] = gradient_and_energy(sys, s, Search::all_pairs);
+  for (const double skin : {0.0, 0.12, 0.5}) {
+    sys.set_neighbour_skin(skin);
+    const auto [g, e] = gradient_and_energy(sys, s, Search::automatic);
+    CHECK((g.array() == g_all.array()).all());
+    CHECK(e == e_all);
+  }
+}

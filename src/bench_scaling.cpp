@@ -1,0 +1,326 @@
+#include "bench_scaling.hpp"
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <sesi/parallel.hpp>
+
+#include "bench_scaling_scenes.hpp"
+#include "errors.hpp"
+#include "integrator.hpp"
+#include "methods.hpp"
+#include "recorder.hpp"
+#include "run_loop.hpp"
+#include "validate.hpp"
+
+namespace sesi::program::bench {
+
+namespace {
+
+/// What a child reports about one point.
+struct Measured {
+  double seconds_per_step = 0;
+  long pairs = 0;  ///< pairs within the cutoff (all pairs for long-range terms)
+  int threads = 0;
+  double peak_rss_mb = 0;
+};
+
+/// One row of scaling.csv.
+struct Row {
+  int bodies;
+  std::string space;
+  int dim;
+  std::string potential, method;
+  Measured m;
+  int stages;  ///< force evaluations per step
+};
+
+std::vector<long> parse_list(const std::string& text, const char* option, long least, long most) {
+  std::vector<long> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    long value = 0;
+    try {
+      value = std::stol(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || value < least || value > most) {
+      throw InputError(std::string(option) + ": '" + item + "' is not a whole number from " + std::to_string(least) +
+                       " to " + std::to_string(most));
+    }
+    out.push_back(value);
+  }
+  if (out.empty()) throw InputError(std::string(option) + ": empty list");
+  return out;
+}
+
+std::vector<std::string> parse_names(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (!is_method(item)) throw InputError("--methods: unknown method '" + item + "' (see sesi methods)");
+    out.push_back(item);
+  }
+  if (out.empty()) throw InputError("--methods: no method given");
+  return out;
+}
+
+/// Seconds per step of `sesi run`'s loop on scene (default checks and cadence), timed from the
+/// end of step `warm` to the end of step warm + steps inside one run of warm + steps + 1 steps:
+/// set-up, the first steps and the rows at the ends stay outside the window, the checks of the
+/// window inside it. Outputs go into dir.
+double seconds_per_step(Scene scene, long warm, long steps, const std::filesystem::path& dir) {
+  const long total = warm + steps + 1;
+  scene.integrator.t_end = static_cast<double>(total) * *scene.integrator.dt;
+  scene.integrator.output_every = total;
+  const bool euclidean = scene.space.kind == SpaceKind::euclidean;
+  Recorder recorder(scene, dir, momentum_names(euclidean ? scene.dim() : scene.dim() + 1, euclidean));
+  const auto integrator = make_integrator(scene);
+  std::chrono::steady_clock::time_point start, end;
+  RunControl control;
+  control.after_step = [&](long k) {
+    if (k == warm) start = std::chrono::steady_clock::now();
+    if (k == warm + steps) end = std::chrono::steady_clock::now();
+  };
+  const RunOutcome outcome = run_loop(scene, *integrator, recorder, control);
+  if (!outcome.complete()) {
+    throw std::runtime_error(outcome.detail + " at step " + std::to_string(outcome.failed_step));
+  }
+  return std::chrono::duration<double>(end - start).count() / static_cast<double>(steps);
+}
+
+/// Runs `measure` in a child process (its own peak memory; libgomp's threads start in it) and
+/// returns what it reported. measure returns seconds per step, pairs and threads.
+template <class Measure>
+Measured in_child(Measure&& measure) {
+  int channel[2];
+  if (pipe(channel) != 0) throw std::runtime_error("sesi bench --scaling: pipe failed");
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("sesi bench --scaling: fork failed");
+  if (pid == 0) {
+    close(channel[0]);
+    std::string report;
+    int status = 0;
+    try {
+      const Measured m = measure();
+      char line[128];
+      std::snprintf(line, sizeof line, "%.17g %ld %d", m.seconds_per_step, m.pairs, m.threads);
+      report = line;
+    } catch (const std::exception& e) {
+      report = e.what();
+      status = 1;
+    }
+    const ssize_t written = write(channel[1], report.data(), report.size());
+    _exit(written == static_cast<ssize_t>(report.size()) ? status : 2);
+  }
+  close(channel[1]);
+  std::string report;
+  char buffer[256];
+  for (ssize_t n; (n = read(channel[0], buffer, sizeof buffer)) > 0;) report.append(buffer, static_cast<std::size_t>(n));
+  close(channel[0]);
+  int status = 0;
+  struct rusage usage {};
+  if (wait4(pid, &status, 0, &usage) != pid) throw std::runtime_error("sesi bench --scaling: wait failed");
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    throw std::runtime_error("sesi bench --scaling: a point failed: " +
+                             (report.empty() ? std::string("the child process died") : report));
+  }
+  Measured m;
+  std::istringstream in(report);
+  in >> m.seconds_per_step >> m.pairs >> m.threads;
+  m.peak_rss_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // kilobytes on Linux
+  return m;
+}
+
+Measured measure_sesi(const ScalingPoint& point, int threads, long warm, long steps) {
+  return in_child([&] {
+    sesi::parallel::set_threads(threads);
+    const Scene scene = scaling_scene(point);
+    Measured m;
+    m.pairs = pairs_within(scene, point.potential == "lennard-jones" ? lj_cutoff : std::numeric_limits<double>::infinity());
+    m.threads = sesi::parallel::threads();
+    // The runs' outputs go to the temporary directory, so that a killed sweep leaves nothing in DIR.
+    const std::filesystem::path work =
+        std::filesystem::temp_directory_path() / ("sesi-scaling-" + std::to_string(getpid()));
+    std::filesystem::create_directories(work);
+    m.seconds_per_step = seconds_per_step(scene, warm, steps, work);
+    std::filesystem::remove_all(work);
+    return m;
+  });
+}
+
+std::string space_label(SpaceKind kind) { return std::string(space_name(kind)); }
+
+void write_row(std::FILE* csv, const Row& r) {
+  const double pairs_per_step = static_cast<double>(r.m.pairs) * r.stages;
+  std::fprintf(csv, "%d,%s,%d,%s,%s,%d,%.6g,%.6g,%.4g,%.1f\n", r.bodies, r.space.c_str(), r.dim, r.potential.c_str(),
+               r.method.c_str(), r.m.threads, r.m.seconds_per_step, pairs_per_step,
+               pairs_per_step > 0 ? r.m.seconds_per_step / pairs_per_step * 1e9 : 0.0, r.m.peak_rss_mb);
+  std::fflush(csv);
+  std::printf("  %7d bodies  %-10s %d  %-17s %-15s %d thr  %10.4g s/step  %8.1f ns/pair  %7.1f MB\n", r.bodies,
+              r.space.c_str(), r.dim, r.potential.c_str(), r.method.c_str(), r.m.threads, r.m.seconds_per_step,
+              pairs_per_step > 0 ? r.m.seconds_per_step / pairs_per_step * 1e9 : 0.0, r.m.peak_rss_mb);
+  std::fflush(stdout);
+}
+
+/// Exponents of time per step against N along each series, and the ratios to the references.
+void print_summary(const std::vector<Row>& rows) {
+  std::map<std::string, std::vector<const Row*>> series;
+  for (const Row& r : rows) {
+    series[r.space + " " + std::to_string(r.dim) + " " + r.method + " " + std::to_string(r.m.threads) + " threads"]
+        .push_back(&r);
+  }
+  std::printf("\nexponent of seconds per step against N (log-log slope):\n");
+  for (const auto& [name, s] : series) {
+    if (s.size() < 2) continue;
+    std::printf("  %-45s", name.c_str());
+    for (std::size_t k = 1; k < s.size(); ++k) {
+      std::printf(" %d-%d: %.2f", s[k - 1]->bodies, s[k]->bodies,
+                  std::log(s[k]->m.seconds_per_step / s[k - 1]->m.seconds_per_step) /
+                      std::log(double(s[k]->bodies) / s[k - 1]->bodies));
+    }
+    std::printf("  all: %.2f\n", std::log(s.back()->m.seconds_per_step / s.front()->m.seconds_per_step) /
+                                     std::log(double(s.back()->bodies) / s.front()->bodies));
+  }
+  std::printf("\nratios per step (same N, same run):\n");
+  for (const Row& r : rows) {
+    if (r.space == "flat-periodic") continue;
+    std::printf("  %7d bodies %-10s %d %-15s %d thr:", r.bodies, r.space.c_str(), r.dim, r.method.c_str(),
+                r.m.threads);
+    for (const Row& q : rows) {
+      if (q.bodies != r.bodies || &q == &r) continue;
+      if (q.space == "flat-periodic") {
+        std::printf("  / flat cell list %.2f", r.m.seconds_per_step / q.m.seconds_per_step);
+      } else if (q.space == "euclidean" && q.dim == 3 && q.method == r.method && q.m.threads == r.m.threads &&
+                 !(r.space == "euclidean" && r.dim == 3)) {
+        std::printf("  / sesi E^3 %.2f", r.m.seconds_per_step / q.m.seconds_per_step);
+      }
+    }
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+
+int scaling_command(const BenchOptions& o) {
+  ScalingPoint base;
+  if (o.space == "sphere") {
+    base.space = SpaceKind::sphere;
+  } else if (o.space == "hyperbolic") {
+    base.space = SpaceKind::hyperbolic;
+  } else if (o.space == "euclidean") {
+    base.space = SpaceKind::euclidean;
+  } else {
+    throw InputError("--space: sphere, hyperbolic or euclidean, not '" + o.space + "'");
+  }
+  if (o.dim < 1 || o.dim > 16) throw InputError("--dim: from 1 to 16, not " + std::to_string(o.dim));
+  base.dim = o.dim;
+  if (o.potential != "lennard-jones" && o.potential != "cotangent-gravity") {
+    throw InputError("--potential: lennard-jones or cotangent-gravity, not '" + o.potential + "'");
+  }
+  base.potential = o.potential;
+  if (!std::isfinite(o.center_distance) || o.center_distance < 0 || o.center_distance > 30) {
+    throw InputError("--center-distance: from 0 to 30 radii");
+  }
+  if (o.center_distance != 0 && base.space != SpaceKind::hyperbolic) {
+    throw InputError("--center-distance: only on --space hyperbolic");
+  }
+  base.center_distance = o.center_distance;
+  if (o.check_every < 0) throw InputError("--check-every: must be >= 1 (or 0, the default cadence)");
+  if (!(o.skin >= 0 && o.skin <= 1)) throw InputError("--skin: a number from 0 to 1");
+  const std::vector<long> sizes = parse_list(o.sizes.empty() ? default_sizes : o.sizes, "--n", 2, 10'000'000);
+  const std::vector<long> threads = parse_list(o.threads.empty() ? "0" : o.threads, "--threads", 0, 1024);
+  const std::vector<std::string> methods = parse_names(o.methods.empty() ? "sesi2" : o.methods);
+  const bool lj = base.potential == "lennard-jones";
+  if (o.steps < 0) throw InputError("--steps: must be > 0");
+  const long warm = lj ? 20 : 1;
+
+  const std::filesystem::path dir = o.out.empty() ? "sesi-out/bench/scaling" : o.out;
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path path = dir / "scaling.csv", partial = dir / "scaling.csv.partial";
+  std::FILE* csv = std::fopen(partial.c_str(), "w");
+  if (!csv) throw std::runtime_error("cannot write " + partial.string());
+  std::fprintf(csv, "# sesi bench --scaling (issue #11; docs/benchmarks.md)\n");
+  std::fprintf(csv,
+               "# seconds_per_step: sesi run's loop (default checks and cadence) timed over steps %ld to %ld + S of "
+               "one run (S: --steps, default about a second's worth), so set-up and the end rows stay out; "
+               "flat-periodic: a plain 3-D LJ cell-list loop, velocity Verlet, one thread\n",
+               warm + 1, warm);
+  std::fprintf(csv, "# pairs_per_step: pairs within the cutoff (all pairs for gravity) x force evaluations per step\n");
+  if (base.space == SpaceKind::hyperbolic) std::fprintf(csv, "# center_distance = %g radii\n", base.center_distance);
+  if (o.check_every > 0) std::fprintf(csv, "# check_every = %ld (not sesi run's default)\n", o.check_every);
+  if (o.skin != 0.12) std::fprintf(csv, "# neighbour_skin = %g (not sesi run's default)\n", o.skin);
+#ifdef NDEBUG
+  std::fprintf(csv, "# build: optimised (NDEBUG)\n");
+#else
+  std::fprintf(csv, "# build: NOT optimised (no NDEBUG): timings are not representative\n");
+#endif
+  std::fprintf(csv, "n_bodies,space,dim,potential,method,threads,seconds_per_step,pairs_per_step,ns_per_pair,peak_rss_mb\n");
+
+  std::printf("sesi bench --scaling: %s, dim %d, %s\n", o.space.c_str(), base.dim, base.potential.c_str());
+  std::vector<Row> rows;
+  const bool flat3 = base.space == SpaceKind::euclidean && base.dim == 3;
+  for (const long n : sizes) {
+    // Enough steps for about a second per point: the time per step is ~ N (Lennard-Jones) or
+    // ~ N^2 (gravity), about 1 s for 2 10^6 / N steps of Lennard-Jones and 2 10^8 / N^2 of gravity.
+    const double scale = lj ? 2e6 / static_cast<double>(n) : 2e8 / (static_cast<double>(n) * static_cast<double>(n));
+    const long steps = o.steps > 0 ? o.steps : std::max(lj ? 40L : 4L, std::min(20000L, std::lround(scale)));
+    for (const std::string& method : methods) {
+      const int stages = find_method_info(method)->stages;
+      for (const long t : threads) {
+        ScalingPoint point = base;
+        point.bodies = static_cast<int>(n);
+        point.check_every = o.check_every;
+        point.neighbour_skin = o.skin;
+        point.method = method;
+        rows.push_back({point.bodies, space_label(point.space), point.dim, point.potential, method,
+                        measure_sesi(point, static_cast<int>(t), warm, steps), stages});
+        write_row(csv, rows.back());
+        if (!flat3) {  // the same bodies' count and density on flat E^3, through sesi
+          ScalingPoint flat = point;
+          flat.space = SpaceKind::euclidean;
+          flat.dim = 3;
+          flat.center_distance = 0;
+          rows.push_back({flat.bodies, "euclidean", 3, flat.potential, method,
+                          measure_sesi(flat, static_cast<int>(t), warm, steps), stages});
+          write_row(csv, rows.back());
+        }
+      }
+    }
+    if (lj) {
+      const Measured m = in_child([&] {
+        Measured out;
+        out.threads = 1;
+        out.seconds_per_step = flat_cell_list_seconds_per_step(static_cast<int>(n), steps, out.pairs);
+        return out;
+      });
+      rows.push_back({static_cast<int>(n), "flat-periodic", 3, "lennard-jones", "velocity-verlet", m, 1});
+      write_row(csv, rows.back());
+    }
+  }
+  const bool ok = std::fclose(csv) == 0;
+  if (!ok || std::rename(partial.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot write " + path.string());
+  print_summary(rows);
+  std::printf("\nwrote %s (%zu rows); plot: /usr/bin/python3 tools/plot_scaling.py %s\n", path.c_str(), rows.size(),
+              dir.c_str());
+  return 0;
+}
+
+}  // namespace sesi::program::bench

@@ -1,0 +1,19 @@
+#pragma once
+/// @file bench_scaling.hpp
+/// `sesi bench --scaling` (issue #11, docs/benchmarks.md): seconds per step of `sesi run`'s own
+/// loop (default checks and cadence) against the number of bodies, with, in the same run, the
+/// same bodies on flat E^3 through sesi's Euclidean path and a plain flat 3-D Lennard-Jones
+/// cell-list loop, so that every figure can be read as a ratio. Each point runs in a child
+/// process, so that its peak resident memory is its own. Writes DIR/scaling.csv.
+
+#include "bench_command.hpp"
+
+namespace sesi::program::bench {
+
+/// Body counts of the default sweep.
+inline constexpr const char* default_sizes = "1000,3000,10000,30000,100000";
+
+/// Run the sweep of options (options.scaling set). @return the exit status.
+int scaling_command(const BenchOptions& options);
+
+}  // namespace sesi::program::bench

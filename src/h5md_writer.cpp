@@ -1,0 +1,336 @@
+#include "h5md_writer.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <initializer_list>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <hdf5.h>
+
+#ifndef SESI_VERSION
+#define SESI_VERSION "unknown"
+#endif
+
+namespace sesi::program {
+
+namespace {
+
+constexpr hid_t no_id = -1;
+
+/// An HDF5 identifier and its close function. The destructor closes quietly; close() reports.
+class Handle {
+ public:
+  using Closer = herr_t (*)(hid_t);
+  Handle() = default;
+  Handle(hid_t id, Closer closer) : id_(id), closer_(closer) {}
+  Handle(Handle&& other) noexcept : id_(std::exchange(other.id_, no_id)), closer_(other.closer_) {}
+  Handle& operator=(Handle&& other) noexcept {
+    if (this != &other) {
+      close();
+      id_ = std::exchange(other.id_, no_id);
+      closer_ = other.closer_;
+    }
+    return *this;
+  }
+  ~Handle() { close(); }
+
+  hid_t get() const { return id_; }
+  /// False if HDF5 failed to close it (for a dataset: to write its cached chunks).
+  bool close() {
+    return id_ < 0 || closer_(std::exchange(id_, no_id)) >= 0;
+  }
+
+ private:
+  hid_t id_ = no_id;
+  Closer closer_ = nullptr;
+};
+
+/// The most specific message on HDF5's error stack (e.g. the system's errno text), then clears it.
+std::string hdf5_message() {
+  std::string innermost;
+  H5Ewalk2(
+      H5E_DEFAULT, H5E_WALK_UPWARD,
+      [](unsigned n, const H5E_error2_t* error, void* data) -> herr_t {
+        if (n == 0 && error->desc) *static_cast<std::string*>(data) = error->desc;
+        return 0;
+      },
+      &innermost);
+  H5Eclear2(H5E_DEFAULT);
+  // A failed system call reads "file write failed: time = ..., error message = 'File too large',
+  // buf = ..."; keep the words and the system's text.
+  const std::string marker = "error message = '";
+  if (const std::size_t at = innermost.find(marker); at != std::string::npos) {
+    const std::size_t from = at + marker.size(), to = innermost.find('\'', from);
+    const std::size_t colon = innermost.find(':');
+    if (to != std::string::npos && colon != std::string::npos && colon < at) {
+      innermost = innermost.substr(0, colon) + ": " + innermost.substr(from, to - from);
+    }
+  }
+  return innermost;
+}
+
+bool deflate_available() {
+  unsigned config = 0;
+  return H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0 && H5Zget_filter_info(H5Z_FILTER_DEFLATE, &config) >= 0 &&
+         (config & H5Z_FILTER_CONFIG_ENCODE_ENABLED) != 0;
+}
+
+/// Chunk of a time series whose frames have shape `item` (doubles or int64): whole frames up to
+/// 256 KiB, so that a small scene's chunk holds many frames and compresses well; a frame larger
+/// than 1 MiB is cut along the bodies, so that no chunk outgrows HDF5's default per-dataset
+/// chunk cache (1 MiB), which holds a chunk until its frames are complete.
+std::vector<hsize_t> chunk_shape(const std::vector<hsize_t>& item) {
+  constexpr hsize_t small = hsize_t{256} << 10, large = hsize_t{1} << 20, max_frames = 1024;
+  hsize_t frame_bytes = 8;
+  for (const hsize_t n : item) frame_bytes *= std::max<hsize_t>(n, 1);
+  std::vector<hsize_t> chunk{1};
+  for (const hsize_t n : item) chunk.push_back(std::max<hsize_t>(n, 1));
+  if (frame_bytes <= small) {
+    chunk[0] = std::clamp<hsize_t>(small / frame_bytes, 1, max_frames);
+  } else if (frame_bytes > large) {
+    const hsize_t body_bytes = frame_bytes / chunk[1];
+    chunk[1] = std::clamp<hsize_t>(large / body_bytes, 1, chunk[1]);
+  }
+  return chunk;
+}
+
+/// A time series under construction: its dataset and the shape of one frame.
+struct Series {
+  Handle dataset;
+  std::vector<hsize_t> item;
+  hid_t memory_type = no_id;
+  std::string name;
+};
+
+}  // namespace
+
+struct H5mdWriter::Impl {
+  std::filesystem::path path;
+  hsize_t bodies = 0, dim = 0, ambient = 0, frames = 0;
+  // Declared first, destroyed last: the file closes after its datasets.
+  Handle file, group_properties, dataset_properties;
+  Series step, time, position, chart_position, chart_momentum, energy;
+
+  [[noreturn]] void fail(const std::string& what) const {
+    const std::string detail = hdf5_message();
+    throw std::runtime_error("cannot write " + path.string() + ": " + what + (detail.empty() ? "" : ": " + detail));
+  }
+  hid_t check(hid_t id, const std::string& what) const {
+    if (id < 0) fail(what);
+    return id;
+  }
+  void check_status(herr_t status, const std::string& what) const {
+    if (status < 0) fail(what);
+  }
+
+  Handle group(hid_t parent, const char* name) const {
+    return {check(H5Gcreate2(parent, name, H5P_DEFAULT, group_properties.get(), H5P_DEFAULT),
+                  std::string("creating group ") + name),
+            H5Gclose};
+  }
+
+  void attribute(hid_t object, const char* name, hid_t file_type, hid_t memory_type, const Handle& space,
+                 const void* data) const {
+    const std::string what = std::string("writing attribute ") + name;
+    const Handle attr(check(H5Acreate2(object, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT), what),
+                      H5Aclose);
+    check_status(H5Awrite(attr.get(), memory_type, data), what);
+  }
+  Handle scalar_space() const { return {check(H5Screate(H5S_SCALAR), "creating a dataspace"), H5Sclose}; }
+  Handle vector_space(hsize_t n) const {
+    return {check(H5Screate_simple(1, &n, nullptr), "creating a dataspace"), H5Sclose};
+  }
+  void attribute_ints(hid_t object, const char* name, const std::vector<int>& values, bool scalar) const {
+    attribute(object, name, H5T_STD_I32LE, H5T_NATIVE_INT, scalar ? scalar_space() : vector_space(values.size()),
+              values.data());
+  }
+  void attribute_double(hid_t object, const char* name, double value) const {
+    attribute(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, scalar_space(), &value);
+  }
+  /// H5MD's strings are fixed-length; one of them is scalar, several a rank-1 array.
+  void attribute_strings(hid_t object, const char* name, const std::vector<std::string>& values,
+                         bool scalar) const {
+    std::size_t width = 1;
+    for (const std::string& v : values) width = std::max(width, v.size() + 1);
+    std::vector<char> buffer(width * values.size(), '\0');
+    for (std::size_t k = 0; k < values.size(); ++k) std::copy(values[k].begin(), values[k].end(), &buffer[k * width]);
+    const Handle type(check(H5Tcopy(H5T_C_S1), "creating a string type"), H5Tclose);
+    check_status(H5Tset_size(type.get(), width), "creating a string type");
+    check_status(H5Tset_strpad(type.get(), H5T_STR_NULLTERM), "creating a string type");
+    attribute(object, name, type.get(), type.get(), scalar ? scalar_space() : vector_space(values.size()),
+              buffer.data());
+  }
+
+  /// An empty time series, extensible along its first (frame) dimension.
+  Series series(hid_t group, const char* name, hid_t file_type, hid_t memory_type, std::vector<hsize_t> item) const {
+    const std::string what = std::string("creating dataset ") + name;
+    std::vector<hsize_t> dims{0}, max_dims{H5S_UNLIMITED};
+    dims.insert(dims.end(), item.begin(), item.end());
+    max_dims.insert(max_dims.end(), item.begin(), item.end());
+    const std::vector<hsize_t> chunk = chunk_shape(item);
+    const int rank = static_cast<int>(dims.size());
+    const Handle space(check(H5Screate_simple(rank, dims.data(), max_dims.data()), what), H5Sclose);
+    const Handle properties(check(H5Pcopy(dataset_properties.get()), what), H5Pclose);
+    check_status(H5Pset_chunk(properties.get(), rank, chunk.data()), what);
+    // Shuffling the bytes of the doubles first lets deflate find the repeated exponents.
+    if (deflate_available()) {
+      check_status(H5Pset_shuffle(properties.get()), what);
+      check_status(H5Pset_deflate(properties.get(), 4), what);
+    }
+    Handle dataset(check(H5Dcreate2(group, name, file_type, space.get(), H5P_DEFAULT, properties.get(), H5P_DEFAULT),
+                         what),
+                   H5Dclose);
+    return Series{std::move(dataset), std::move(item), memory_type, name};
+  }
+
+  /// Extends s by one frame (frames + 1) and writes data there.
+  void append(const Series& s, const void* data) const {
+    const std::string what = "writing frame " + std::to_string(frames) + " of " + s.name;
+    std::vector<hsize_t> dims{frames + 1}, start{frames}, count{1};
+    dims.insert(dims.end(), s.item.begin(), s.item.end());
+    start.resize(dims.size(), 0);
+    count.insert(count.end(), s.item.begin(), s.item.end());
+    const int rank = static_cast<int>(dims.size());
+    check_status(H5Dset_extent(s.dataset.get(), dims.data()), what);
+    const Handle file_space(check(H5Dget_space(s.dataset.get()), what), H5Sclose);
+    check_status(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr),
+                 what);
+    const Handle memory_space(check(H5Screate_simple(rank, count.data(), nullptr), what), H5Sclose);
+    check_status(H5Dwrite(s.dataset.get(), s.memory_type, memory_space.get(), file_space.get(), H5P_DEFAULT, data),
+                 what);
+  }
+
+  void link(const char* from, const char* to) const {
+    check_status(H5Lcreate_hard(file.get(), from, file.get(), to, H5P_DEFAULT, H5P_DEFAULT),
+                 std::string("linking ") + to);
+  }
+};
+
+H5mdWriter::H5mdWriter(const std::filesystem::path& path, const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  // A file whose close failed (say, the disk is full) stays in HDF5's table after being freed,
+  // and HDF5 1.10's exit-time cleanup then crashes on it (HDFGroup/hdf5 pull request 2291).
+  // Everything is closed here, so no cleanup at exit is needed; this works only before HDF5's
+  // first use, which this is.
+  H5dont_atexit();
+  // Failures become exceptions with one line; HDF5 would otherwise print its error stack.
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  Impl& w = *impl_;
+  w.path = path;
+  w.bodies = static_cast<hsize_t>(scene.body_count());
+  w.dim = static_cast<hsize_t>(scene.dim());
+  w.ambient = scene.space.kind == SpaceKind::euclidean ? w.dim : w.dim + 1;
+
+  // No modification times in the objects: the same run gives the same bytes.
+  const Handle file_creation(w.check(H5Pcreate(H5P_FILE_CREATE), "creating the file"), H5Pclose);
+  w.check_status(H5Pset_obj_track_times(file_creation.get(), false), "creating the file");
+  // SEMI: closing the file fails, rather than being deferred, if anything is still open.
+  const Handle file_access(w.check(H5Pcreate(H5P_FILE_ACCESS), "creating the file"), H5Pclose);
+  w.check_status(H5Pset_fclose_degree(file_access.get(), H5F_CLOSE_SEMI), "creating the file");
+  w.file = Handle(w.check(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, file_creation.get(), file_access.get()),
+                          "creating the file"),
+                  H5Fclose);
+  w.group_properties = Handle(w.check(H5Pcreate(H5P_GROUP_CREATE), "creating the file"), H5Pclose);
+  w.check_status(H5Pset_obj_track_times(w.group_properties.get(), false), "creating the file");
+  w.dataset_properties = Handle(w.check(H5Pcreate(H5P_DATASET_CREATE), "creating the file"), H5Pclose);
+  w.check_status(H5Pset_obj_track_times(w.dataset_properties.get(), false), "creating the file");
+  const hid_t root = w.file.get();
+
+  {
+    const Handle h5md = w.group(root, "h5md");
+    w.attribute_ints(h5md.get(), "version", {1, 1}, false);
+    const Handle author = w.group(h5md.get(), "author");
+    w.attribute_strings(author.get(), "name", {"sesi"}, true);
+    const Handle creator = w.group(h5md.get(), "creator");
+    w.attribute_strings(creator.get(), "name", {"sesi"}, true);
+    w.attribute_strings(creator.get(), "version", {SESI_VERSION}, true);
+  }
+  {
+    // What the embedding coordinates mean: a sphere or hyperboloid of this radius, or E^n.
+    const Handle parameters = w.group(root, "parameters");
+    w.attribute_strings(parameters.get(), "space", {std::string(space_name(scene.space.kind))}, true);
+    w.attribute_ints(parameters.get(), "dim", {scene.dim()}, true);
+    if (scene.space.kind != SpaceKind::euclidean) w.attribute_double(parameters.get(), "radius", scene.space.radius);
+  }
+  const Handle particles = w.group(root, "particles");
+  const Handle all = w.group(particles.get(), "all");
+  {
+    // H5MD requires a box; the embedding space has no boundary, so no edges either.
+    const Handle box = w.group(all.get(), "box");
+    w.attribute_ints(box.get(), "dimension", {static_cast<int>(w.ambient)}, true);
+    w.attribute_strings(box.get(), "boundary", std::vector<std::string>(w.ambient, "none"), false);
+  }
+  {
+    const Handle position = w.group(all.get(), "position");
+    w.step = w.series(position.get(), "step", H5T_STD_I64LE, H5T_NATIVE_INT64, {});
+    w.step.name = "particles/all/position/step";
+    w.time = w.series(position.get(), "time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {});
+    w.time.name = "particles/all/position/time";
+    w.position = w.series(position.get(), "value", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {w.bodies, w.ambient});
+    w.position.name = "particles/all/position";
+  }
+  // The other elements are sampled with the positions: their step and time are hard links.
+  const auto element = [&](hid_t parent, const char* group, const char* full_name, std::vector<hsize_t> item) {
+    const Handle g = w.group(parent, group);
+    Series s = w.series(g.get(), "value", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, std::move(item));
+    s.name = full_name;
+    w.link("/particles/all/position/step", (std::string("/") + full_name + "/step").c_str());
+    w.link("/particles/all/position/time", (std::string("/") + full_name + "/time").c_str());
+    return s;
+  };
+  w.chart_position = element(all.get(), "chart_position", "particles/all/chart_position", {w.bodies, w.dim});
+  w.chart_momentum = element(all.get(), "chart_momentum", "particles/all/chart_momentum", {w.bodies, w.dim});
+  {
+    std::vector<double> masses;
+    for (const Body& b : scene.bodies) masses.push_back(b.mass);
+    const Handle space = w.vector_space(w.bodies);
+    const Handle mass(w.check(H5Dcreate2(all.get(), "mass", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT,
+                                         w.dataset_properties.get(), H5P_DEFAULT),
+                              "creating dataset mass"),
+                      H5Dclose);
+    w.check_status(H5Dwrite(mass.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, masses.data()),
+                   "writing dataset mass");
+  }
+  const Handle observables = w.group(root, "observables");
+  w.energy = element(observables.get(), "energy", "observables/energy", {});
+}
+
+H5mdWriter::~H5mdWriter() = default;
+
+void H5mdWriter::write(const Snapshot& s) {
+  Impl& w = *impl_;
+  if (w.file.get() < 0) throw std::logic_error("H5mdWriter::write after close");
+  const auto fits = [](const Eigen::MatrixXd& m, hsize_t rows, hsize_t cols) {
+    return static_cast<hsize_t>(m.rows()) == rows && static_cast<hsize_t>(m.cols()) == cols;
+  };
+  if (!fits(s.x, w.ambient, w.bodies) || !fits(s.q, w.dim, w.bodies) || !fits(s.p, w.dim, w.bodies)) {
+    throw std::logic_error("H5mdWriter::write: snapshot shape differs from the scene");
+  }
+  // Eigen's column-major dim x bodies is C's [bodies][dim]: the layout of one frame.
+  const std::int64_t step = s.step;
+  w.append(w.step, &step);
+  w.append(w.time, &s.t);
+  w.append(w.position, s.x.data());
+  w.append(w.chart_position, s.q.data());
+  w.append(w.chart_momentum, s.p.data());
+  w.append(w.energy, &s.energy);
+  ++w.frames;
+}
+
+void H5mdWriter::close() {
+  Impl& w = *impl_;
+  if (w.file.get() < 0) return;
+  bool ok = true;
+  for (Series* s : {&w.energy, &w.chart_momentum, &w.chart_position, &w.position, &w.time, &w.step}) {
+    ok = s->dataset.close() && ok;
+  }
+  ok = w.dataset_properties.close() && ok;
+  ok = w.group_properties.close() && ok;
+  ok = ok && H5Fflush(w.file.get(), H5F_SCOPE_LOCAL) >= 0;
+  ok = w.file.close() && ok;
+  if (!ok) w.fail("closing the file");
+}
+
+}  // namespace sesi::program

@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""Runs a small `sesi bench --scaling` (issue #11) and checks scaling.csv: the columns the docs
+name, one row per (N, method, threads) for the space asked for and for the flat E^3 reference,
+and a flat cell-list row per N for Lennard-Jones; positive times; pairs per step equal to the
+pairs within the cutoff times the force evaluations per step (so ns_per_pair is what it says);
+and that bad options are refused with exit status 2, one line naming the option, nothing written.
+Timings are not checked: speed targets live in the benchmark (docs/benchmarks.md)."""
+import argparse
+import csv
+import os
+import shutil
+import subprocess
+import sys
+
+COLUMNS = ["n_bodies", "space", "dim", "potential", "method", "threads", "seconds_per_step",
+           "pairs_per_step", "ns_per_pair", "peak_rss_mb"]
+
+
+def read(path):
+    with open(path) as f:
+        lines = [line for line in f if not line.startswith("#")]
+    reader = csv.DictReader(lines)
+    return reader.fieldnames, list(reader)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sesi", required=True)
+    ap.add_argument("--work", required=True)
+    a = ap.parse_args()
+    failures = []
+
+    def run(args, out):
+        shutil.rmtree(out, ignore_errors=True)
+        return subprocess.run([a.sesi, "bench", "--scaling", *args, "--out", out], capture_output=True, text=True,
+                              timeout=100)
+
+    for option, args in [("--space", ["--space", "torus"]), ("--n", ["--n", "100,x"]),
+                         ("--methods", ["--methods", "sesi3"]), ("--potential", ["--potential", "coulomb"]),
+                         ("--center-distance", ["--center-distance", "2"]), ("--threads", ["--threads", "-1"])]:
+        out = os.path.join(a.work, "scaling-bad")
+        r = run(args, out)
+        if r.returncode != 2 or len(r.stderr.strip().splitlines()) != 1 or option not in r.stderr or \
+                os.path.exists(out):
+            failures.append(f"{args}: exit {r.returncode}, stderr {r.stderr!r}, written: {os.path.exists(out)}")
+
+    cases = [
+        (["--space", "sphere", "--dim", "2", "--n", "300,600", "--steps", "5", "--threads", "1,2"], "sphere", 2, 2, True),
+        (["--space", "hyperbolic", "--dim", "2", "--center-distance", "5", "--n", "300", "--steps", "5"],
+         "hyperbolic", 2, 1, True),
+        (["--space", "sphere", "--dim", "3", "--n", "300", "--steps", "5", "--methods", "sesi2,sesi4"],
+         "sphere", 3, 1, True),
+        (["--space", "sphere", "--dim", "2", "--potential", "cotangent-gravity", "--n", "100", "--steps", "4",
+          "--methods", "sesi4"], "sphere", 2, 1, False),
+    ]
+    stages = {"sesi2": 1, "sesi4": 3}
+    for args, space, dim, threads_given, lj in cases:
+        out = os.path.join(a.work, f"scaling-{space}{dim}{'-lj' if lj else '-gravity'}")
+        r = run(args, out)
+        sys.stderr.write(r.stderr)
+        if r.returncode != 0:
+            failures.append(f"{args}: exit {r.returncode}: {r.stderr.strip()}")
+            continue
+        path = os.path.join(out, "scaling.csv")
+        if os.path.exists(path + ".partial"):
+            failures.append(f"{args}: scaling.csv.partial left behind")
+        fields, rows = read(path)
+        if fields != COLUMNS:
+            failures.append(f"{args}: columns {fields}")
+            continue
+        sizes = [int(n) for n in args[args.index("--n") + 1].split(",")]
+        methods = args[args.index("--methods") + 1].split(",") if "--methods" in args else ["sesi2"]
+        expected = len(sizes) * (len(methods) * threads_given * 2 + (1 if lj else 0))
+        if len(rows) != expected:
+            failures.append(f"{args}: {len(rows)} rows, expected {expected}")
+        for row in rows:
+            t = float(row["seconds_per_step"])
+            pairs = float(row["pairs_per_step"])
+            n = int(row["n_bodies"])
+            if not t > 0 or not float(row["peak_rss_mb"]) > 0 or not pairs > 0:
+                failures.append(f"{args}: non-positive figure in {row}")
+                continue
+            if abs(float(row["ns_per_pair"]) - t / pairs * 1e9) > 1e-3 * t / pairs * 1e9:
+                failures.append(f"{args}: ns_per_pair {row['ns_per_pair']} is not seconds / pairs")
+            if row["space"] == "flat-periodic":
+                continue
+            if row["space"] not in (space, "euclidean") or (row["space"] == "euclidean" and row["dim"] != "3"):
+                failures.append(f"{args}: unexpected row {row}")
+            per_step = stages[row["method"]]
+            if not lj and pairs != n * (n - 1) / 2 * per_step:
+                failures.append(f"{args}: gravity pairs per step {pairs}, expected {n * (n - 1) / 2 * per_step}")
+            if lj and not (0.5 * n * per_step < pairs < 20 * n * per_step):
+                failures.append(f"{args}: {pairs} Lennard-Jones pairs per step at density 1/2 for {n} bodies")
+        if "--threads" in args:
+            counts = sorted({row["threads"] for row in rows if row["space"] == space})
+            if counts != ["1", "2"]:
+                failures.append(f"{args}: thread counts {counts}")
+    for f in failures:
+        print("FAIL:", f)
+    print("ok" if not failures else f"{len(failures)} failure(s)")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
