@@ -5,6 +5,8 @@
 
 #include <string>
 
+#include <sesi/neighbours.hpp>  // default_skin_fraction
+
 namespace CLI {
 class App;
 }
@@ -31,7 +33,7 @@ struct BenchOptions {
   long steps = 0;                          ///< timed steps per point (0: the default)
   double center_distance = 0;              ///< H^n: the cluster's centre, in radii from the origin
   long check_every = 0;                    ///< the runs' check cadence (0: sesi run's default)
-  double skin = 0.12;                      ///< the runs' neighbour_skin
+  double skin = sesi::default_skin_fraction;  ///< the runs' neighbour_skin
 };
 
 /// Add the `bench` subcommand to app, parsing into options.

@@ -266,7 +266,7 @@ int scaling_command(const BenchOptions& o) {
   std::fprintf(csv, "# pairs_per_step: pairs within the cutoff (all pairs for gravity) x force evaluations per step\n");
   if (base.space == SpaceKind::hyperbolic) std::fprintf(csv, "# center_distance = %g radii\n", base.center_distance);
   if (o.check_every > 0) std::fprintf(csv, "# check_every = %ld (not sesi run's default)\n", o.check_every);
-  if (o.skin != 0.12) std::fprintf(csv, "# neighbour_skin = %g (not sesi run's default)\n", o.skin);
+  if (o.skin != sesi::default_skin_fraction) std::fprintf(csv, "# neighbour_skin = %g (not sesi run's default)\n", o.skin);
 #ifdef NDEBUG
   std::fprintf(csv, "# build: optimised (NDEBUG)\n");
 #else

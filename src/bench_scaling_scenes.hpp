@@ -22,7 +22,7 @@ struct ScalingPoint {
   int bodies = 1000;
   double center_distance = 0;  ///< H^n: the cluster's centre this many radii from the origin
   long check_every = 0;        ///< the run's check cadence (0: sesi run's default)
-  double neighbour_skin = 0.12;
+  double neighbour_skin = sesi::default_skin_fraction;
 };
 
 /// Lennard-Jones of the scaling scenes: epsilon = sigma = 1, cutoff 2.5 sigma, dt 0.002.

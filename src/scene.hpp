@@ -11,6 +11,8 @@
 
 #include <Eigen/Core>
 
+#include <sesi/neighbours.hpp>  // default_skin_fraction
+
 namespace sesi::program {
 
 enum class SpaceKind { sphere, hyperbolic, euclidean };
@@ -82,7 +84,7 @@ struct IntegratorSpec {
   long check_every = 0;
   /// Skin of the short-range terms' Verlet lists, a fraction of each term's cutoff (0: lists
   /// rebuilt every force evaluation); only the run time depends on it (System::set_neighbour_skin).
-  double neighbour_skin = 0.12;
+  double neighbour_skin = sesi::default_skin_fraction;
   /// Format of the trajectory: csv (trajectory.csv) or h5md (trajectory.h5, H5MD 1.1).
   TrajectoryFormat trajectory_format = TrajectoryFormat::csv;
   int line = 0;  ///< line of [integrator] in the scene file (0: none), for messages

@@ -338,15 +338,18 @@ class NeighbourIndex {
   std::vector<Scalar> height_;
 };
 
+/// The default skin of a Verlet list as a fraction of the range: LAMMPS' default 0.3 sigma is
+/// 0.12 of a Lennard-Jones cutoff of 2.5 sigma (docs/benchmarks.md, "Skin", measures it).
+inline constexpr double default_skin_fraction = 0.12;
+
 /// A neighbour list with a skin, for one short-range term in one workspace.
 template <class Chart>
 class VerletList {
  public:
   using Scalar = typename Chart::Scalar;
 
-  /// The skin as a fraction of the range (LAMMPS' default 0.3 sigma is 0.12 of an LJ cutoff of
-  /// 2.5 sigma). The forces do not depend on it, only the time they take.
-  Scalar skin_fraction = Scalar(0.12);
+  /// The skin as a fraction of the range. The forces do not depend on it, only the time they take.
+  Scalar skin_fraction = Scalar(default_skin_fraction);
 
   /// Lists valid for points X (ambient x bodies) and range: rebuilt when X has a different
   /// number of bodies, the range or the skin changed, or a body moved more than half the skin

@@ -154,7 +154,7 @@ class System {
   void set_pair_search(PairSearch search) { pair_search_ = search; }
   PairSearch pair_search() const { return pair_search_; }
   /// The skin of the short-range terms' Verlet lists, as a fraction of each term's range
-  /// (VerletList::skin_fraction, default 0.12); 0 rebuilds the lists at every evaluation. The
+  /// (VerletList::skin_fraction, default default_skin_fraction); 0 rebuilds the lists at every evaluation. The
   /// forces do not depend on it, only the time they take (docs/benchmarks.md, "Skin").
   void set_neighbour_skin(Scalar fraction) { neighbour_skin_ = fraction; }
   Scalar neighbour_skin() const { return neighbour_skin_; }
@@ -671,7 +671,7 @@ class System {
   std::vector<Scalar> masses_;
   std::tuple<Terms...> terms_;
   PairSearch pair_search_ = PairSearch::automatic;
-  Scalar neighbour_skin_ = Scalar(0.12);
+  Scalar neighbour_skin_ = Scalar(default_skin_fraction);
 };
 
 /// Deduction guide: System(chart, masses, terms...).
