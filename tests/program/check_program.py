@@ -894,6 +894,13 @@ def example_scenes_cover_spaces(ctx):
             check(found, f"no {kind} example with {form} initial conditions")
 
 
+# ---- more cases, one file per theme -------------------------------------------------------------
+# tests/program/cases_*.py hold further @case functions. Each runs in this module's namespace, so
+# it uses the helpers above (Context, check, expect_input_error, ...) without importing them.
+for _extra in sorted(HERE.glob("cases_*.py")):
+    exec(compile(_extra.read_text(), str(_extra), "exec"), globals())
+
+
 # ---- driver ------------------------------------------------------------------------------------
 
 def all_cases(source):
