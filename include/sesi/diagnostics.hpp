@@ -8,6 +8,11 @@
 /// (M_12, M_13, M_23) are (L_z, -L_y, L_x) of L = sum m x cross v. On E^n the map is the linear
 /// momentum P = sum m v followed by the same M (angular momentum).
 /// The vector form lists P (E^n only), then M_ab for a < b in row-major order.
+///
+/// A state with a cluster frame C (State::cluster, H^n) has world points C x_local: points and
+/// velocities are mapped by C last (relative accuracy eps whatever C's size), and the momentum
+/// map, a sum of O(1) local terms, is formed in the cluster's frame and moved to the world as
+/// M = C M_local C^T (the adjoint action of the isometry; no world point enters the sum).
 
 #include <Eigen/Core>
 
@@ -41,6 +46,7 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_po
     sys.chart().embed(q, x);
     X.col(b) = s.framed() ? (s.frames[static_cast<std::size_t>(b)] * x).eval() : x;
   }
+  if (s.clustered) X = (s.cluster * X).eval();
   return X;
 }
 
@@ -59,6 +65,7 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_ve
     sys.chart().velocity(q, p, sys.mass(b), v);
     V.col(b) = s.framed() ? (s.frames[static_cast<std::size_t>(b)] * v).eval() : v;
   }
+  if (s.clustered) V = (s.cluster * V).eval();
   return V;
 }
 
@@ -68,6 +75,29 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, 1> momentum_map(
     const Sys& sys, const State<typename Sys::Chart>& s) {
   using Chart = typename Sys::Chart;
   using Scalar = typename Sys::Scalar;
+  if (!has_translations<Chart> && s.clustered) {
+    // In the cluster's frame, then M = C M_local C^T (see the file comment).
+    State<Chart> local = s;
+    local.clustered = false;
+    const auto m = momentum_map(sys, local);
+    const int a = sys.ambient_dim();
+    Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> ml =
+        Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>::Zero(a, a);
+    int k = 0;
+    for (int r = 0; r < a; ++r) {
+      for (int c = r + 1; c < a; ++c, ++k) {
+        ml(r, c) = m[k];
+        ml(c, r) = -m[k];
+      }
+    }
+    const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> mw = s.cluster * ml * s.cluster.transpose();
+    Eigen::Matrix<Scalar, Eigen::Dynamic, 1> out(m.size());
+    k = 0;
+    for (int r = 0; r < a; ++r) {
+      for (int c = r + 1; c < a; ++c, ++k) out[k] = mw(r, c);
+    }
+    return out;
+  }
   const auto X = embedding_points(sys, s);
   const auto V = embedding_velocities(sys, s);
   const int a = sys.ambient_dim();

@@ -39,6 +39,10 @@ struct RechartPolicy {
   /// geodesic's closest approach to the new origin is this radius (below max_radius / 2, so that
   /// a homed body is turned, not homed, when it reaches max_radius).
   Scalar home_radius = Scalar(1);
+  /// H^n with a cluster frame (State::cluster): the cluster is re-centred when the centre of its
+  /// cluster-local points is farther than this from the frame's origin (recentre()), so that the
+  /// local points, and with them every pair chord and central term, stay O(1).
+  Scalar cluster_radius = Scalar(2);
 };
 
 /// Charts that know their singular set and how to re-chart a body (built-in S^n and H^n).
@@ -57,8 +61,73 @@ concept Rechartable =
 struct Recharted {
   int turned = 0;
   int homed = 0;
+  int recentred = 0;  ///< cluster re-centrings (not counted in total(): no body is re-charted)
   int total() const { return turned + homed; }
 };
+
+/// Charts that can move a cluster frame (H^n): the standard boost to a point.
+template <class C>
+concept ClusterChart = EmbeddedChart<C> && requires(const C& c, const typename C::Ambient& y,
+                                                    typename State<C>::Frame& b) {
+  c.boost_to(y, b);
+};
+
+/// Re-centre the cluster frame of s (State::cluster) when the centre of the bodies'
+/// cluster-local points x_b = F_b embed(q_b) -- their mass-weighted Minkowski mean, normalised
+/// onto the hyperboloid (the centre of mass of the hyperboloid model) -- lies farther than
+/// policy.cluster_radius from the frame's origin: with B the standard boost to that centre (O(1)
+/// entries, Lorentz to rounding), C <- C B and F_b <- B^{-1} F_b (B^{-1} = eta B^T eta). World
+/// points C F_b embed(q_b) are unchanged, q and p are untouched, and every potential, a function
+/// of the local points' mutual distances (and of the centres moved with C), is unchanged: a
+/// change of world coordinates, not of the dynamics, so the method stays symplectic and
+/// reversible. Returns whether it re-centred. Nothing happens without a cluster frame, nor for
+/// a system with force centres (System::has_movable_centres): its frame stays at the centre,
+/// where the centre is exact, since a far centre off the frame's origin is known only to
+/// eps sinh D (Hyperbolic::to_frame).
+template <class Sys>
+bool recentre(const Sys& sys, State<typename Sys::Chart>& s,
+              const RechartPolicy<typename Sys::Scalar>& policy) {
+  using Chart = typename Sys::Chart;
+  using Scalar = typename Sys::Scalar;
+  if constexpr (ClusterChart<Chart>) {
+    if (!s.clustered || s.bodies() == 0) return false;
+    // A system with force centres keeps its frame where it was put (see has_movable_centres).
+    if constexpr (requires { Sys::has_movable_centres; }) {
+      if (Sys::has_movable_centres) return false;
+    }
+    using std::cosh;
+    using std::sqrt;
+    const Chart& chart = sys.chart();
+    const int a = chart.ambient_dim(), n = chart.dim();
+    typename Chart::Point q(n);
+    typename Chart::Ambient x(a), mean = Chart::Ambient::Zero(a);
+    for (int b = 0; b < s.bodies(); ++b) {
+      q = s.q.col(b);
+      chart.embed(q, x);
+      if (s.framed()) x = (s.frames[static_cast<std::size_t>(b)] * x).eval();
+      mean += sys.mass(b) * x;
+    }
+    const Scalar norm2 = -chart.inner(mean, mean);  // -<m,m>_L > 0 (a sum of future points)
+    if (!(norm2 > Scalar(0))) return false;  // (NaN: leave the state to the finiteness check)
+    const typename Chart::Ambient y = chart.radius() * mean / sqrt(norm2);
+    // Its distance r from the frame's origin: cosh r = y_t / R.
+    if (!(y[n] / chart.radius() > cosh(policy.cluster_radius))) return false;
+    typename State<Chart>::Frame boost(a, a);
+    chart.boost_to(y, boost);
+    typename State<Chart>::Frame inverse = boost.transpose();  // eta B^T eta
+    inverse.row(n) = -inverse.row(n);
+    inverse.col(n) = -inverse.col(n);
+    s.cluster = (s.cluster * boost).eval();
+    if (!s.framed()) s.enable_frames(a);
+    for (auto& frame : s.frames) frame = (inverse * frame).eval();
+    return true;
+  } else {
+    static_cast<void>(sys);
+    static_cast<void>(s);
+    static_cast<void>(policy);
+    return false;
+  }
+}
 
 /// Re-chart every body of s whose chart says so (Chart::rechart_action) under policy. The first
 /// call gives s identity frames.
@@ -79,6 +148,7 @@ Recharted rechart(const Sys& sys, State<typename Sys::Chart>& s,
   using Chart = typename Sys::Chart;
   Recharted done;
   if constexpr (Rechartable<Chart>) {
+    if (s.clustered && recentre(sys, s, policy)) ++done.recentred;
     const Chart& chart = sys.chart();
     if (!s.framed()) s.enable_frames(chart.ambient_dim());
     typename Chart::Point q(chart.dim()), p(chart.dim());
@@ -124,12 +194,20 @@ State<typename Sys::Chart> in_world_chart(const Sys& sys, const State<typename S
   out.q = s.q;
   out.p = s.p;
   if constexpr (Rechartable<Chart>) {
-    if (!s.framed()) return out;
+    if (!s.framed() && !s.clustered) return out;
     const Chart& chart = sys.chart();
     typename Chart::Point q(chart.dim()), p(chart.dim());
     typename Chart::Ambient x(chart.ambient_dim()), v(chart.ambient_dim());
+    typename State<Chart>::Frame frame(chart.ambient_dim(), chart.ambient_dim());
     for (int b = 0; b < s.bodies(); ++b) {
-      const auto& frame = s.frames[static_cast<std::size_t>(b)];
+      // World = C F_b embed(q_b) (C: the cluster frame, if any). Far out this reading is as
+      // ill-conditioned as the chart itself (docs/charts.md, "The cluster frame").
+      if (s.framed()) {
+        frame = s.frames[static_cast<std::size_t>(b)];
+      } else {
+        frame.setIdentity(chart.ambient_dim(), chart.ambient_dim());
+      }
+      if (s.clustered) frame = (s.cluster * frame).eval();
       // A body never re-charted keeps its coordinates as they are (angles unwrapped).
       if (frame.isIdentity(Scalar(0))) continue;
       q = s.q.col(b);

@@ -65,6 +65,10 @@ struct Workspace : TrigStore<Chart> {
   std::vector<VerletList<Chart>> verlet;
   /// The tiles' partial gradients and energies (System's symmetric pair sums on threads).
   std::vector<Scalar> tile_gradients, tile_energies;
+  /// The state's cluster frame C (State::cluster) while the terms are evaluated: external terms
+  /// see their centres in the cluster's frame (or, without a centre, world points C x).
+  Eigen::Matrix<Scalar, ambient_dimension, ambient_dimension> cluster;
+  bool clustered = false;
 
   /// Scratch for `chunks` chunks of the given sizes (allocates only when they grow).
   void ensure_scratch(int chunks, int dim, int ambient) {
@@ -127,6 +131,28 @@ class System {
   static constexpr int ambient_dimension = detail::ambient_dimension_of<Chart>();
 
   static constexpr bool has_potential = sizeof...(Terms) > 0;
+
+  /// External terms with a public force centre (`center`, a world point) whose value depends on
+  /// the distance to it only (CentralCotangent): in a cluster frame they are evaluated with the
+  /// centre moved into the cluster's frame, C^{-1} c, computed by the chart without cancellation
+  /// (Hyperbolic::to_frame), so a centre near the cluster is O(1) like the bodies.
+  template <class Term>
+  static constexpr bool has_movable_center =
+      requires(Term t, const Chart& c,
+               const Eigen::Matrix<Scalar, ambient_dimension, ambient_dimension>& frame) {
+        c.to_frame(frame, t.center, t.center);
+      };
+  /// Whether some term has such a centre: then a cluster frame stays where it was put (at the
+  /// centre; sesi::recentre), since a far centre off the frame's origin is known only to
+  /// eps sinh D (docs/charts.md).
+  static constexpr bool has_movable_centres = (has_movable_center<Terms> || ... || false);
+  /// The term as the system evaluates it on w's cluster-local points: with the centre moved
+  /// into the cluster frame when w.clustered (for a check on w.X, e.g. a close-encounter floor).
+  template <class Term>
+    requires has_movable_center<Term>
+  Term in_cluster_frame(const Term& term, const sesi::Workspace<Chart>& w) const {
+    return w.clustered ? localized(term, w) : term;
+  }
   static_assert(!has_potential || EmbeddedChart<Chart>,
                 "potential terms act on embedding points: the chart must model EmbeddedChart");
 
@@ -299,8 +325,11 @@ class System {
   }
 
  private:
-  /// w.X from the caches (or from q for charts without them).
+  /// w.X from the caches (or from q for charts without them): the cluster-local points
+  /// F_b embed(q_b) (world = C F_b embed(q_b) with C = s.cluster when s.clustered).
   void embed_cached(const StateType& s, Workspace& w) const {
+    w.clustered = s.clustered;
+    if (s.clustered) w.cluster = s.cluster;
     for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
       if constexpr (HasTrigCache<Chart>) {
         chart_.embed(w.trig[static_cast<std::size_t>(b)], sc.x);
@@ -601,6 +630,22 @@ class System {
       static_assert(ExternalTerm<Term, Chart>, "a term must model ExternalTerm or PairTerm");
       static_cast<void>(index);
       w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
+      if (w.clustered) {
+        if constexpr (has_movable_center<Term>) {
+          const Term local = localized(term, w);
+          for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+            sc.x = w.X.col(b);
+            w.rows[static_cast<std::size_t>(b)] = local.value(chart_, sc.x, mass(b));
+          });
+        } else {
+          // A term without a centre is a function of world points: V(C x).
+          for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+            sc.x.noalias() = w.cluster * w.X.col(b);
+            w.rows[static_cast<std::size_t>(b)] = term.value(chart_, sc.x, mass(b));
+          });
+        }
+        return parallel::sum_in_order(w.rows);
+      }
       for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
         sc.x = w.X.col(b);
         w.rows[static_cast<std::size_t>(b)] = term.value(chart_, sc.x, mass(b));
@@ -659,12 +704,38 @@ class System {
       }
     } else {
       static_cast<void>(index);
+      if (w.clustered) {
+        if constexpr (has_movable_center<Term>) {
+          const Term local = localized(term, w);
+          for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+            sc.x = w.X.col(b);
+            local.gradient(chart_, sc.x, mass(b), sc.g);
+            w.G.col(b) += sc.g;
+          });
+        } else {
+          // d V(C x) / dx = C^T (dV/dx)(C x): the chain rule through the cluster frame.
+          for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+            sc.y.noalias() = w.cluster * w.X.col(b);
+            term.gradient(chart_, sc.y, mass(b), sc.g);
+            w.G.col(b).noalias() += w.cluster.transpose() * sc.g;
+          });
+        }
+        return;
+      }
       for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
         sc.x = w.X.col(b);
         term.gradient(chart_, sc.x, mass(b), sc.g);
         w.G.col(b) += sc.g;
       });
     }
+  }
+
+  /// The term with its centre in the cluster's frame (w.cluster).
+  template <class Term>
+  Term localized(const Term& term, const Workspace& w) const {
+    Term local = term;
+    chart_.to_frame(w.cluster, term.center, local.center);
+    return local;
   }
 
   Chart chart_;

@@ -292,6 +292,83 @@ class Hyperbolic {
     momentum(q, inverse(v), m, p);
   }
 
+  // ---- the cluster frame (State::cluster; docs/charts.md, "The cluster frame") ----
+
+  /// The standard boost B(y) that takes the origin R e_{n+1} to the point y (<y,y>_L = -R^2):
+  /// B = [[I + y_s y_s^T / (R (R + y_t)), y_s / R], [y_s^T / R, y_t / R]], Lorentz to rounding
+  /// for any y (no cancellation: R + y_t >= 2R). Used with an O(1) y when a cluster re-centres.
+  template <class Frame>
+  void boost_to(const Ambient& y, Frame& b) const {
+    const int n = dim_;
+    const auto ys = (y.head(n) / radius_).eval();
+    const Scalar yt = y[n] / radius_;
+    b.resize(n + 1, n + 1);
+    b.topLeftCorner(n, n) = ys * ys.transpose() / (Scalar(1) + yt);
+    b.topLeftCorner(n, n).diagonal().array() += Scalar(1);
+    b.topRightCorner(n, 1) = ys;
+    b.bottomLeftCorner(1, n) = ys.transpose();
+    b(n, n) = yt;
+  }
+
+  /// out = C^{-1} c for a Lorentz C and a point c of the space, without the cancellation of the
+  /// matrix product (rows of C^{-1} and c both ~e^D far out would lose eps e^{2D}). With p = C o
+  /// the frame's origin (o = R e_{n+1}) at radius r in direction u, and c at radius rho in
+  /// direction w (polar readings, relative accuracy), C = B(p) Q with Q a rotation, and by the
+  /// hyperbolic law of cosines in half-angle form (theta the angle between u and w,
+  /// |w - u|^2 = 4 sin^2(theta/2)):
+  ///   B(p)^{-1} c / R = (w_perp sinh rho + a u, t),  w_perp = (w - u) - ((w - u).u) u,
+  ///   t = cosh(rho - r) + sinh r sinh rho |w - u|^2 / 2,
+  ///   a = sinh(rho - r) - cosh r sinh rho |w - u|^2 / 2,
+  /// and Q's columns Q e_k = B(p)^{-1} C e_k = C e_k - p_s (C e_k)_t / (R + p_t) on the tangent
+  /// vectors C e_k at p. A point at the frame's origin (c = p) comes out as R e_{n+1} exactly;
+  /// otherwise the error is that of reading c's direction, eps sinh(d(o, c)) in distance (what a
+  /// world point far out can resolve at all).
+  template <class Frame>
+  void to_frame(const Frame& c_frame, const Ambient& c, Ambient& out) const {
+    using std::asinh;
+    using std::cosh;
+    using std::sinh;
+    using std::sqrt;
+    const int n = dim_;
+    // (c is read by its radius and direction only: a centre off the hyperboloid by rounding
+    // lands on it.)
+    out.resize(n + 1);
+    // C is dimensionless: its last column is the frame's origin on the unit hyperboloid.
+    const auto ps = c_frame.col(n).head(n).eval();
+    const Scalar pt = c_frame(n, n);
+    const auto cs = (c.head(n) / radius_).eval();
+    const Scalar sr = ps.norm(), srho = cs.norm();
+    const Scalar r = asinh(sr), rho = asinh(srho);
+    Eigen::Matrix<Scalar, N, 1> u = Eigen::Matrix<Scalar, N, 1>::Zero(n), w(n);
+    if (sr > Scalar(0)) u = ps / sr;
+    if (srho > Scalar(0)) {
+      w = cs / srho;
+    } else {
+      w = u;  // c at the world origin: any direction, sinh rho = 0
+    }
+    Eigen::Matrix<Scalar, N, 1> b(n);
+    if (sr > Scalar(0)) {
+      const Eigen::Matrix<Scalar, N, 1> dw = w - u;
+      const Scalar half = dw.squaredNorm() / Scalar(2);  // 2 sin^2(theta/2) = 1 - cos theta
+      const Scalar a = sinh(rho - r) - cosh(r) * srho * half;
+      b = (dw - dw.dot(u) * u) * srho + a * u;
+    } else {
+      b = cs;  // the frame's origin is the world origin: B(p) = I
+    }
+    // Q^T b: Q's columns from C's spatial columns (tangent at p), O(1) after the subtraction.
+    Eigen::Matrix<Scalar, N, N> q(n, n);
+    for (int k = 0; k < n; ++k) {
+      q.col(k) = c_frame.col(k).head(n) - ps * (c_frame(n, k) / (Scalar(1) + pt));
+    }
+    const Eigen::Matrix<Scalar, N, 1> local = q.transpose() * b;
+    out.head(n) = radius_ * local;
+    // On the hyperboloid by construction: the time part from the spatial one,
+    // cosh(d) = sqrt(1 + sinh^2 d) (no cancellation).
+    out[n] = radius_ * sqrt(Scalar(1) + local.squaredNorm());
+    SESI_CHECK(abs_of(constraint(out)) <= invariant_tolerance() * out[n] * out[n],
+               "to_frame: the point must be on the hyperboloid");
+  }
+
   /// Constraint residual <x,x> + R^2 (zero on the space).
   Scalar constraint(const Ambient& x) const { return minkowski(x, x) + radius_ * radius_; }
   /// Tangency residual <x, v> (zero for v tangent at x).
