@@ -45,7 +45,9 @@ clean:
 	rm -rf $(BUILD_DIR) $(RELEASE_DIR)
 
 # libFuzzer on the scene reader (fuzz/): a clang build in build-fuzz, run for FUZZ_SECONDS with the
-# example and bad scenes as seeds; the corpus grows in fuzz-out/corpus, crashes go to fuzz-out/.
+# example and bad scenes and the regression inputs (fuzz/regressions) as seeds; the corpus grows in
+# fuzz-out/corpus, crashes go to fuzz-out/. Inputs up to 1 MB: the 80 KB deep key of issue #12 lay
+# beyond libFuzzer's default limit of 4 KB.
 FUZZ_DIR     ?= build-fuzz
 FUZZ_SECONDS ?= 600
 fuzz: deps
@@ -53,8 +55,8 @@ fuzz: deps
 	  -DSESI_BUILD_FUZZ=ON -DSESI_BUILD_TESTS=OFF -DSESI_BUILD_EXAMPLES=OFF -DSESI_INSTALL=OFF
 	cmake --build $(FUZZ_DIR) -j $(JOBS) --target sesi_scene_fuzzer
 	mkdir -p fuzz-out/corpus fuzz-out/artifacts
-	$(FUZZ_DIR)/fuzz/sesi_scene_fuzzer fuzz-out/corpus examples/scenes tests/program/bad \
-	  -dict=fuzz/scene.dict -max_total_time=$(FUZZ_SECONDS) -artifact_prefix=fuzz-out/artifacts/ \
+	$(FUZZ_DIR)/fuzz/sesi_scene_fuzzer fuzz-out/corpus examples/scenes tests/program/bad fuzz/regressions \
+	  -dict=fuzz/scene.dict -max_len=1048576 -max_total_time=$(FUZZ_SECONDS) -artifact_prefix=fuzz-out/artifacts/ \
 	  -print_final_stats=1
 
 # The benchmark figures and tables of docs/benchmarks.md (issue #4): `sesi bench` on the built-in

@@ -4,12 +4,12 @@
 #include <array>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <optional>
-#include <sstream>
 
 #include <toml++/toml.h>
 
@@ -18,6 +18,7 @@
 #include "errors.hpp"
 #include "geometry.hpp"
 #include "paper_scene.hpp"
+#include "scene_limits.hpp"
 #include "suggest.hpp"
 #include "validate.hpp"
 
@@ -442,10 +443,21 @@ class SceneReader {
     }
     const std::string position_key = body.key_path(chart ? "q" : "x");
     if (!std::isfinite(g.kinetic_energy(out.q, out.p, out.mass))) {
-      throw InputError(body.origin_of(chart ? "q" : "x"), position_key,
-                       "the body sits on a singular point of the chart (a pole of the sphere or the "
-                       "origin of hyperbolic space), where its kinetic energy is not finite; move it "
-                       "off that point");
+      // A singular point is one where the inverse metric itself is not finite (unit momenta give
+      // an infinite kinetic energy); anywhere else, the momenta are too large for double.
+      if (!std::isfinite(g.kinetic_energy(out.q, Eigen::VectorXd::Ones(n), 1.0))) {
+        throw InputError(body.origin_of(chart ? "q" : "x"), position_key,
+                         "the body sits on a singular point of the chart (a pole of the sphere or the "
+                         "origin of hyperbolic space), where its kinetic energy is not finite; move it "
+                         "off that point");
+      }
+      // p (or v) is given here: with zero momenta the kinetic energy is 0 or NaN, not inf.
+      const std::string_view speed = chart ? "p" : "v";
+      throw InputError(body.origin_of(speed), body.key_path(speed),
+                       std::string("too large: the kinetic energy overflows (exceeds the largest double, "
+                                   "1.8e308) with ") +
+                           (chart ? "these momenta" : "this velocity") + " and mass " + format_number(out.mass) +
+                           "; use smaller values or other units");
     }
     scene_.bodies.push_back(std::move(out));
     provenance_.bodies.push_back(body.origin());
@@ -729,6 +741,8 @@ class SceneReader {
 }  // namespace
 
 Scene read_scene_text(std::string_view text, const std::string& path) {
+  // Size, key parts and nesting first: toml++ recurses once per level (scene_limits.hpp).
+  check_scene_limits(text, path);
   std::string shielded;
   if (const auto where = shield_from_toml_bug(text, shielded)) {
     throw InputError(Origin{path, where->first, where->second}, "",
@@ -750,13 +764,30 @@ Scene read_scene_file(const std::string& path) {
   if (std::filesystem::is_directory(path, ec)) {
     throw InputError(Origin{path}, "", "expected a scene file, got a directory");
   }
+  const auto too_large = [&] {
+    return InputError(Origin{path}, "",
+                      "the scene file has more than " + std::to_string(max_scene_bytes) +
+                          " bytes (1 GiB); at most that many are allowed");
+  };
+  std::uintmax_t size = 0;  // known for a regular file, 0 otherwise
+  if (std::filesystem::is_regular_file(path, ec)) {
+    size = std::filesystem::file_size(path, ec);
+    if (ec) size = 0;
+  }
+  if (size > max_scene_bytes) throw too_large();
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     throw InputError(Origin{path}, "", std::string("cannot read the scene file: ") + std::strerror(errno));
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return read_scene_text(text.str(), path);
+  // Read at most one byte past the limit, so that a device or a pipe without end is refused too.
+  std::string text;
+  text.reserve(static_cast<std::size_t>(size));
+  std::array<char, 1 << 16> chunk{};
+  while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    if (text.size() > max_scene_bytes) throw too_large();
+  }
+  return read_scene_text(text, path);
 }
 
 }  // namespace sesi::program
