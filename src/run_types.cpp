@@ -6,26 +6,28 @@ namespace sesi::program {
 
 namespace {
 
-/// "overflowed to +-inf", "became NaN", or "" when every value of v is finite.
-std::string what_went_wrong(const Eigen::Ref<const Eigen::VectorXd>& v) {
-  if (v.array().isNaN().any()) return "became NaN (not a number)";
-  if (v.array().isInf().any()) return "overflowed to +-inf (beyond the largest double, 1.8e308)";
-  return "";
-}
+bool has_inf(const Eigen::Ref<const Eigen::VectorXd>& v) { return v.array().isInf().any(); }
+bool has_nan(const Eigen::Ref<const Eigen::VectorXd>& v) { return v.array().isNaN().any(); }
 
 }  // namespace
 
 std::string non_finite_detail(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p, int body, double energy) {
-  std::string detail = "the state became non-finite";
+  const std::string detail = "the state became non-finite";
+  const std::string overflow = " overflowed to +-inf (beyond the largest double, 1.8e308)";
+  const std::string nan = " became NaN (not a number)";
   const Eigen::Index k = body - 1;
   const std::string who = body > 0 ? "body " + std::to_string(body) + "'s " : "the ";
   if (k >= 0 && k < q.cols() && k < p.cols()) {
-    if (std::string what = what_went_wrong(q.col(k)); !what.empty()) return detail + ": " + who + "coordinates " + what;
-    if (std::string what = what_went_wrong(p.col(k)); !what.empty()) return detail + ": " + who + "momenta " + what;
+    // An infinity first: the NaN that often comes with it in the same step (inf - inf, 0 * inf)
+    // is its consequence, and the cause to report is the overflow.
+    if (has_inf(q.col(k))) return detail + ": " + who + "coordinates" + overflow;
+    if (has_inf(p.col(k))) return detail + ": " + who + "momenta" + overflow;
+    if (has_nan(q.col(k))) return detail + ": " + who + "coordinates" + nan;
+    if (has_nan(p.col(k))) return detail + ": " + who + "momenta" + nan;
   }
   const std::string at = body > 0 ? " (at body " + std::to_string(body) + ")" : "";
-  if (std::isnan(energy)) return detail + ": the energy became NaN (not a number)" + at;
-  if (std::isinf(energy)) return detail + ": the energy overflowed to +-inf (beyond the largest double, 1.8e308)" + at;
+  if (std::isinf(energy)) return detail + ": the energy" + overflow + at;
+  if (std::isnan(energy)) return detail + ": the energy" + nan + at;
   return detail;
 }
 

@@ -47,10 +47,10 @@ struct RunControl {
 
 /// What RunOutcome::detail says of a non-finite state: "the state became non-finite: body 3's
 /// momenta overflowed to +-inf" when a value of body's column of q or p (1-based) is infinite,
-/// "... became NaN" when one is NaN; with both finite, the same of energy (the total energy that
-/// was not finite, and body the one whose term was). Overflow and NaN have different causes (a
-/// step or a force too large for double, against 0/0 or inf - inf), so the message tells them
-/// apart (issue #12: "the messages for overflow say overflow").
+/// "... became NaN" when one is NaN and none is infinite; with both finite, the same of energy
+/// (the total energy that was not finite, and body the one whose term was). Overflow and NaN have
+/// different causes (a step or a force too large for double, against 0/0 at a singular point), so
+/// the message tells them apart (issue #12: "the messages for overflow say overflow").
 std::string non_finite_detail(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p, int body, double energy);
 
 /// "completed", "non-finite state", "invariant failed", "interrupted", "energy error exceeded",
