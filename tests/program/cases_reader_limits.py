@@ -120,3 +120,48 @@ def reader_limits_fuzz_regressions(ctx):
         result = ctx.run("run", path, "--out", ctx.work / "out")
         check(result.returncode == 2, f"{path.name}: exit status {result.returncode}: {result.stderr!r}")
         expect_input_error(result, file=path)
+
+
+# ---- overflow says overflow (issue #12) ---------------------------------------------------------
+
+OVERFLOW_RUN = """name = "overflow"
+# A harmonic pair stepped far beyond its stability limit (w dt = 14 > 2): the state grows by about
+# 200x a step and overflows to inf, with the energy guard off so that nothing stops it before.
+[space]
+kind = "euclidean"
+dim = 1
+[[bodies]]
+mass = 1.0
+q = [0.5]
+p = [0.0]
+[[bodies]]
+mass = 1.0
+q = [-0.5]
+p = [0.0]
+[[potential]]
+kind = "harmonic-pair"
+k = 1.0
+[integrator]
+method = "sesi2"
+dt = 10.0
+t_end = 10000.0
+energy_guard = false
+"""
+
+
+@case
+def run_overflow_says_overflow(ctx):
+    result = ctx.run("run", ctx.write("overflow.toml", OVERFLOW_RUN), "--out", ctx.work / "out")
+    err = result.stderr
+    check(result.returncode == 3, f"exit status {result.returncode}, expected 3: {err!r}")
+    check(err.count("\n") == 1 and "non-finite" in err, f"expected one line: {err!r}")
+    check("overflowed to +-inf" in err and "NaN" not in err, f"the message does not say overflow: {err!r}")
+
+
+@case
+def run_nan_says_nan(ctx):
+    # check_program.py's BLOWUP: the chord-well's square root of a negative number.
+    result = ctx.run("run", ctx.write("blowup.toml", BLOWUP), "--out", ctx.work / "out")
+    err = result.stderr
+    check(result.returncode == 3, f"exit status {result.returncode}, expected 3: {err!r}")
+    check("became NaN" in err and "overflow" not in err, f"the message does not say NaN: {err!r}")
