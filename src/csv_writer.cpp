@@ -5,6 +5,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "output_dir.hpp"
+
 namespace sesi::program {
 
 CsvWriter::CsvWriter(const std::filesystem::path& path, const std::vector<std::string>& header)
@@ -51,7 +53,7 @@ void CsvWriter::close() {
 }
 
 void CsvWriter::check(bool ok) const {
-  if (!ok) throw std::runtime_error("cannot write " + path_.string() + ": " + std::strerror(errno));
+  if (!ok) throw std::runtime_error("cannot write " + shown_path(path_).string() + ": " + std::strerror(errno));
 }
 
 }  // namespace sesi::program

@@ -10,6 +10,8 @@
 
 #include <hdf5.h>
 
+#include "output_dir.hpp"
+
 #ifndef SESI_VERSION
 #define SESI_VERSION "unknown"
 #endif
@@ -116,7 +118,8 @@ struct H5mdWriter::Impl {
 
   [[noreturn]] void fail(const std::string& what) const {
     const std::string detail = hdf5_message();
-    throw std::runtime_error("cannot write " + path.string() + ": " + what + (detail.empty() ? "" : ": " + detail));
+    throw std::runtime_error("cannot write " + shown_path(path).string() + ": " + what +
+                             (detail.empty() ? "" : ": " + detail));
   }
   hid_t check(hid_t id, const std::string& what) const {
     if (id < 0) fail(what);

@@ -6,35 +6,77 @@
 /// Until then an existing output directory is untouched; a run killed outright leaves only the
 /// hidden staging directory, never a file that looks finished.
 ///
-/// An existing output directory is replaced only if it holds nothing but sesi outputs
-/// (trajectory.csv, trajectory.h5, diagnostics.csv, exact.csv, summary.json and plots *.png,
-/// *.pdf, *.svg), so a mistyped --out never deletes other files.
+/// Nothing that sesi did not write is ever deleted:
+/// - an existing output directory is accepted only if it holds nothing but sesi outputs
+///   (trajectory.csv, trajectory.h5, diagnostics.csv, exact.csv, summary.json, checkpoint and
+///   plots *.png, *.pdf, *.svg), so a mistyped --out never deletes other files;
+/// - entries added to it during the run are moved into the new outputs, and named on stderr;
+/// - a run that did not complete never replaces a complete earlier run: it goes to DIR.incomplete;
+/// - a lock file in the parent (".NAME.sesi-lock", flock) keeps two runs out of one directory;
+/// - holding the lock, a run removes the staging directories of killed runs into the same
+///   directory (marked by sesi, holding only sesi outputs) and names any other such folder.
 
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
+
+#include <sys/types.h>
 
 #include "errors.hpp"
 
 namespace sesi::program {
 
+/// An exclusive flock() on a lock file, held while this lives; the file is removed on release.
+class DirLock {
+ public:
+  DirLock() = default;
+  ~DirLock();
+  DirLock(const DirLock&) = delete;
+  DirLock& operator=(const DirLock&) = delete;
+
+  /// Lock `file` (created if missing) and write this process's id into it.
+  /// @throws InputError "KEY: is in use by another sesi run (pid N)" when another process holds it
+  void acquire(const std::filesystem::path& file, const std::string& key);
+
+ private:
+  int fd_ = -1;
+  std::filesystem::path file_;
+};
+
 class StagingDir {
  public:
-  /// Check that target can be written (or replaced) and create the staging directory.
-  /// @throws InputError (exit status 2) naming `option` when target is unusable
+  /// Check that target can be written (or replaced), lock it, clean up after killed runs, and
+  /// create the staging directory.
+  /// @throws InputError (exit status 2) naming `option` when target is unusable or in use
   StagingDir(std::filesystem::path target, const std::string& option);
-  /// Removes the staging directory unless it was published.
+  /// Removes the staging directory unless it was published; releases the lock.
   ~StagingDir();
   StagingDir(const StagingDir&) = delete;
   StagingDir& operator=(const StagingDir&) = delete;
 
   const std::filesystem::path& path() const { return staging_; }
   const std::filesystem::path& target() const { return target_; }
-  /// Move the staging directory into place as the target (replacing an earlier one).
-  void publish();
+  /// Move the staging directory into place and return where the outputs now are: the target
+  /// (replacing the earlier outputs there and keeping anything else found in it), or, when
+  /// `complete` is false and the target holds a complete earlier run, "TARGET.incomplete",
+  /// so that an interrupted or failed re-run never costs a finished one.
+  std::filesystem::path publish(bool complete = true);
 
  private:
+  using Entry = std::pair<std::string, std::pair<dev_t, ino_t>>;
+
+  std::filesystem::path publish_to(const std::filesystem::path& dest, const std::vector<Entry>& earlier);
+
+  DirLock lock_;
   std::filesystem::path target_, staging_;
+  std::vector<Entry> earlier_;  ///< the target's entries when the run started (sesi outputs)
+  std::pair<dev_t, ino_t> earlier_dir_{};  ///< the target directory itself then, if it existed
   bool published_ = false;
 };
+
+/// `path` as the user should see it in a message: a path inside a live staging directory is
+/// shown inside its output directory (the --out the user gave), never the temporary name.
+std::filesystem::path shown_path(const std::filesystem::path& path);
 
 }  // namespace sesi::program

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "exact_track.hpp"
+#include "output_dir.hpp"
 #include "validate.hpp"
 #ifdef SESI_HAVE_HDF5
 #include "h5md_writer.hpp"
@@ -44,7 +45,7 @@ void write_file_atomically(const std::filesystem::path& path, const std::string&
   if (ok) ok = std::fwrite(text.data(), 1, text.size(), file) == text.size();
   if (file) ok = std::fclose(file) == 0 && ok;
   if (ok) ok = std::rename(temporary.c_str(), path.c_str()) == 0;
-  if (!ok) throw std::runtime_error("cannot write " + path.string() + ": " + std::strerror(errno));
+  if (!ok) throw std::runtime_error("cannot write " + shown_path(path).string() + ": " + std::strerror(errno));
 }
 }  // namespace
 

@@ -139,15 +139,15 @@ int run_command(const RunOptions& options) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish();
   recorder.finish(outcome, wall);
-  staging.publish();
+  const std::filesystem::path dir = staging.publish(outcome.reason == StopReason::completed);
 
   switch (outcome.reason) {
     case StopReason::completed:
-      if (!options.quiet) print_report(scene, recorder, outcome, wall, target);
+      if (!options.quiet) print_report(scene, recorder, outcome, wall, dir);
       return exit_ok;
     case StopReason::interrupted:
       print_error(scene.name + ": interrupted after step " + std::to_string(outcome.steps_done) +
-                  "; the outputs so far are in " + target.string() + ", marked incomplete");
+                  "; the outputs so far are in " + dir.string() + ", marked incomplete");
       return exit_interrupted;
     case StopReason::non_finite:
     case StopReason::invariant_failed:
@@ -159,7 +159,7 @@ int run_command(const RunOptions& options) {
               " (t = " + format_number(outcome.failed_t) + ")" +
               (outcome.failed_body > 0 ? ", body " + std::to_string(outcome.failed_body) : std::string()) +
               "; last step known good: " + std::to_string(outcome.steps_done) + "; the outputs up to it are in " +
-              target.string() + ", marked incomplete");
+              dir.string() + ", marked incomplete");
   return exit_run_failed;
 }
 
