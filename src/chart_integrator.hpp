@@ -75,6 +75,19 @@ class ChartIntegrator final : public Integrator {
     }
     return 0;
   }
+  FramedState framed_state() const override {
+    FramedState out{x_.q, x_.p, {}, x_.clustered, {}};
+    out.frames.assign(x_.frames.begin(), x_.frames.end());
+    if (x_.clustered) out.cluster = x_.cluster;
+    return out;
+  }
+  void restore(const FramedState& state) override {
+    x_.q = state.q;
+    x_.p = state.p;
+    x_.frames.assign(state.frames.begin(), state.frames.end());
+    x_.clustered = state.clustered;
+    if (state.clustered) x_.cluster = state.cluster;
+  }
   /// In the scene's own chart: bodies re-charted by the stepper are mapped back (q and p of
   /// the outputs and of summary.json always mean the same coordinates).
   void read(Eigen::MatrixXd& q, Eigen::MatrixXd& p) const override {

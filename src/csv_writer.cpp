@@ -21,6 +21,19 @@ CsvWriter::CsvWriter(const std::filesystem::path& path, const std::vector<std::s
   check(std::fputc('\n', file_) != EOF);
 }
 
+CsvWriter::CsvWriter(const std::filesystem::path& path) : path_(path), buffer_(1 << 16) {
+  file_ = std::fopen(path.c_str(), "a");
+  check(file_ != nullptr);
+  std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
+}
+
+std::uint64_t CsvWriter::flushed_bytes() {
+  check(std::fflush(file_) == 0);
+  const long at = std::ftell(file_);
+  check(at >= 0);
+  return static_cast<std::uint64_t>(at);
+}
+
 CsvWriter::~CsvWriter() {
   if (file_) std::fclose(file_);
 }

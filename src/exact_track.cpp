@@ -23,6 +23,13 @@ ExactTrack::ExactTrack(const std::filesystem::path& path, int bodies)
       max_error_(static_cast<std::size_t>(bodies), 0.0),
       last_error_(static_cast<std::size_t>(bodies), 0.0) {}
 
+ExactTrack::ExactTrack(const std::filesystem::path& path, std::vector<double> max_error,
+                       std::vector<double> last_error)
+    : bodies_(static_cast<int>(max_error.size())),
+      csv_(path),
+      max_error_(std::move(max_error)),
+      last_error_(std::move(last_error)) {}
+
 void ExactTrack::row(const Snapshot& s) {
   static const sesi::scenes::paper::Exact exact;
   row_.assign(1, s.t);

@@ -10,6 +10,7 @@
 
 #include <hdf5.h>
 
+#include "errors.hpp"
 #include "output_dir.hpp"
 
 #ifndef SESI_VERSION
@@ -320,6 +321,58 @@ void H5mdWriter::write(const Snapshot& s) {
   w.append(w.chart_momentum, s.p.data());
   w.append(w.energy, &s.energy);
   ++w.frames;
+}
+
+void H5mdWriter::replay(const std::filesystem::path& from, unsigned long long frames) {
+  const Impl& w = *impl_;
+  const auto refuse = [&](const std::string& what) {
+    H5Eclear2(H5E_DEFAULT);
+    return InputError(Origin{from.string()}, "", what + ", but the checkpoint goes on from it");
+  };
+  const Handle file(H5Fopen(from.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (file.get() < 0) throw refuse("cannot be read as HDF5");
+  // One dataset, all its frames up to `frames`, as a flat vector of item-sized frames.
+  const auto read = [&](const char* name, hid_t memory_type, hsize_t item, auto* out) {
+    const Handle dataset(H5Dopen2(file.get(), name, H5P_DEFAULT), H5Dclose);
+    if (dataset.get() < 0) throw refuse(std::string("has no dataset ") + name);
+    const Handle space(H5Dget_space(dataset.get()), H5Sclose);
+    hsize_t dims[3] = {0, 0, 0};
+    const int rank = space.get() < 0 ? -1 : H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    hsize_t size = 1;
+    for (int k = 1; k < rank; ++k) size *= dims[k];
+    if (rank < 1 || rank > 3 || dims[0] < frames || size != item) {
+      throw refuse(std::string("has fewer frames or another shape in ") + name);
+    }
+    out->resize(static_cast<std::size_t>(frames * item));
+    if (frames == 0) return;
+    hsize_t start[3] = {0, 0, 0}, count[3] = {frames, dims[1], dims[2]};
+    if (H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr) < 0) {
+      throw refuse(std::string("cannot select the frames of ") + name);
+    }
+    const Handle memory(H5Screate_simple(rank, count, nullptr), H5Sclose);
+    if (H5Dread(dataset.get(), memory_type, memory.get(), space.get(), H5P_DEFAULT, out->data()) < 0) {
+      throw refuse(std::string("cannot read ") + name);
+    }
+  };
+  std::vector<std::int64_t> step;
+  std::vector<double> time, x, q, p, energy;
+  read("particles/all/position/step", H5T_NATIVE_INT64, 1, &step);
+  read("particles/all/position/time", H5T_NATIVE_DOUBLE, 1, &time);
+  read("particles/all/position/value", H5T_NATIVE_DOUBLE, w.bodies * w.ambient, &x);
+  read("particles/all/chart_position/value", H5T_NATIVE_DOUBLE, w.bodies * w.dim, &q);
+  read("particles/all/chart_momentum/value", H5T_NATIVE_DOUBLE, w.bodies * w.dim, &p);
+  read("observables/energy/value", H5T_NATIVE_DOUBLE, 1, &energy);
+  const auto rows = static_cast<Eigen::Index>(w.bodies);
+  Snapshot s;
+  for (unsigned long long f = 0; f < frames; ++f) {
+    s.step = static_cast<long>(step[f]);
+    s.t = time[f];
+    s.x = Eigen::Map<const Eigen::MatrixXd>(&x[f * w.bodies * w.ambient], static_cast<Eigen::Index>(w.ambient), rows);
+    s.q = Eigen::Map<const Eigen::MatrixXd>(&q[f * w.bodies * w.dim], static_cast<Eigen::Index>(w.dim), rows);
+    s.p = Eigen::Map<const Eigen::MatrixXd>(&p[f * w.bodies * w.dim], static_cast<Eigen::Index>(w.dim), rows);
+    s.energy = energy[f];
+    write(s);
+  }
 }
 
 void H5mdWriter::close() {

@@ -34,6 +34,10 @@ class H5mdWriter {
 
   /// Appends one frame: step, t, x, q, p and the energy of s.
   void write(const Snapshot& s);
+  /// Writes again, through write(), the first `frames` frames of the earlier file `from` (a run
+  /// resumed from a checkpoint): the same calls with the same numbers as the uninterrupted run's,
+  /// so the same bytes. Throws InputError when `from` cannot be read or has fewer frames.
+  void replay(const std::filesystem::path& from, unsigned long long frames);
   /// Flushes and closes; throws if anything failed to reach the file.
   void close();
 

@@ -5,12 +5,23 @@
 /// the scene's runtime space and dimension to a compile-time chart (dispatch.cpp).
 
 #include <memory>
+#include <vector>
 
 #include <Eigen/Core>
 
 #include "scene.hpp"
 
 namespace sesi::program {
+
+/// What is stepped, exactly as the integrator holds it: chart coordinates and momenta of every
+/// body in its own chart frame, and the frames (empty: every body in the scene's chart). This,
+/// not a chart conversion, is what a checkpoint saves and a resumed run restores.
+struct FramedState {
+  Eigen::MatrixXd q, p;                ///< dim x bodies
+  std::vector<Eigen::MatrixXd> frames;  ///< one ambient x ambient isometry per body, or none
+  bool clustered = false;               ///< H^n: the bodies' frames are relative to `cluster`
+  Eigen::MatrixXd cluster;              ///< the cluster frame (sesi::State::cluster), if clustered
+};
 
 class Integrator {
  public:
@@ -31,6 +42,10 @@ class Integrator {
   /// Embedding points and velocities in world coordinates (ambient x bodies).
   virtual Eigen::MatrixXd points() = 0;
   virtual Eigen::MatrixXd velocities() = 0;
+  /// The state as stepped, and its restoration (a checkpoint's; the run goes on bit for bit as
+  /// if it had not stopped: the stepper's caches are recomputed from it alike).
+  virtual FramedState framed_state() const = 0;
+  virtual void restore(const FramedState& state) = 0;
   /// With a non-finite energy: the first body (1-based) whose kinetic energy or potential
   /// gradient is not finite, or 0.
   virtual int body_with_non_finite_energy() = 0;

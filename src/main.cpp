@@ -9,6 +9,7 @@
 #include "errors.hpp"
 #include "methods.hpp"
 #include "run_command.hpp"
+#include "signals.hpp"
 
 namespace {
 
@@ -31,21 +32,24 @@ std::string run_footer() {
       "                 \"central-cotangent\" (k, center), \"harmonic-pair\" (k, d0),\n"
       "                 \"lennard-jones\" (epsilon, sigma, cutoff); singular terms also min_distance\n"
       "  [integrator]   method, dt, t_end, output_every, energy_guard, threads, check_every,\n"
-      "                 neighbour_skin, trajectory_format\n"
+      "                 checkpoint_every, neighbour_skin, trajectory_format\n"
       "  Without SCENE: the seed paper's three bodies on S^2 with sesi4, dt = 0.1, t_end = 800.\n"
-      "\nOUTPUTS (in DIR, replaced as a whole when the run ends):\n"
+      "\nOUTPUTS (in DIR, put in place when the run ends; docs/scene-format.md says what is kept):\n"
       "  trajectory.csv   t, then per body b: b<b>_q<i>, b<b>_p<i>, b<b>_x<i>\n"
       "  trajectory.h5    instead, with trajectory_format h5md: the same numbers as H5MD\n"
       "  diagnostics.csv  t, energy, energy_error, momentum-map components\n"
       "  exact.csv        exact positions (scenes with an exact solution: the default scene)\n"
       "  summary.json     settings, energy and momentum-map errors, final state, wall time\n"
+      "  checkpoint       the state to go on from (checkpoint_every, or a signal): sesi resume DIR\n"
       "\nEXIT STATUS:\n"
       "  0 done;  2 bad scene or argument (one line on stderr, nothing written);\n"
       "  3 the run went wrong: the state became non-finite, the energy error passed the guard\n"
       "    ([integrator] energy_guard) or two bodies came below the close-encounter floor\n"
       "    (min_distance); one line names the step, time and bodies; outputs so far kept,\n"
       "    \"complete\": false in summary.json;\n"
-      "  130 interrupted (likewise);  1 other failure (e.g. a write error).\n"
+      "  130 interrupted by SIGINT, SIGTERM or SIGHUP (likewise, with a checkpoint to resume from;\n"
+      "    before the run starts, nothing written; a second signal stops at once);\n"
+      "  1 other failure (e.g. a write error).\n"
       "\nA progress bar appears on stderr for runs longer than a second when stderr is a terminal.\n";
   return text;
 }
@@ -53,6 +57,7 @@ std::string run_footer() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  signals::install();  // before anything is read: a signal then ends the program with nothing written
   install_check_handler();
 
   CLI::App app{"sesi: explicit symplectic integration of Hamiltonian dynamics on spheres S^n,\n"
@@ -65,7 +70,7 @@ int main(int argc, char** argv) {
   RunOptions options;
   std::string method;
   double dt = 0.0, t_end = 0.0;
-  long output_every = 0, threads = 0, check_every = 0;
+  long output_every = 0, threads = 0, check_every = 0, checkpoint_every = 0;
   double neighbour_skin = 0;
   std::string trajectory_format;
   CLI::App* run = app.add_subcommand("run", "Run a scene and write its trajectory, diagnostics and summary.");
@@ -90,6 +95,11 @@ int main(int argc, char** argv) {
   auto* check_opt = run->add_option("--check-every", check_every,
                                     "Steps between energy and encounter checks, >= 1 (output rows are always checked).")
                         ->type_name("N");
+  auto* checkpoint_opt =
+      run->add_option("--checkpoint-every", checkpoint_every,
+                      "Steps between checkpoints (DIR/checkpoint, for sesi resume), >= 1; a signal always "
+                      "writes one.")
+          ->type_name("N");
   auto* skin_opt = run->add_option("--neighbour-skin", neighbour_skin,
                                    "Verlet-list skin of cutoff terms, a fraction of the cutoff from 0 to 1 (default "
                                    "0.12; 0: rebuilt every evaluation).")
@@ -98,6 +108,21 @@ int main(int argc, char** argv) {
       run->add_option("--trajectory-format", trajectory_format, "Trajectory format: csv or h5md.")->type_name("F");
   run->add_flag("--quiet,-q", options.quiet, "No report on stdout and no progress bar.");
   run->footer(run_footer());
+  ResumeOptions resume_options;
+  double resume_t_end = 0.0;
+  long resume_threads = 0;
+  CLI::App* resume = app.add_subcommand(
+      "resume", "Go on with a stopped run from its checkpoint; its outputs are extended as if it had not stopped.");
+  resume->add_option("DIR", resume_options.dir,
+                     "The stopped run's output directory (a killed run's checkpoint beside it is found too).")
+      ->type_name("DIR")
+      ->required();
+  auto* resume_t_end_opt =
+      resume->add_option("--t-end", resume_t_end, "A later end of the run (default: the run's own).")->type_name("T");
+  auto* resume_threads_opt =
+      resume->add_option("--threads,-j", resume_threads, "Threads, >= 0 (0: all cores; results do not depend on it).")
+          ->type_name("N");
+  resume->add_flag("--quiet,-q", resume_options.quiet, "No report on stdout and no progress bar.");
   BenchOptions bench_options;
   CLI::App* bench = add_bench_subcommand(app, bench_options);
 
@@ -114,11 +139,15 @@ int main(int argc, char** argv) {
   if (every_opt->count() > 0) options.output_every = output_every;
   if (threads_opt->count() > 0) options.threads = threads;
   if (check_opt->count() > 0) options.check_every = check_every;
+  if (checkpoint_opt->count() > 0) options.checkpoint_every = checkpoint_every;
+  if (resume_t_end_opt->count() > 0) resume_options.t_end = resume_t_end;
+  if (resume_threads_opt->count() > 0) resume_options.threads = resume_threads;
   if (format_opt->count() > 0) options.trajectory_format = trajectory_format;
   if (skin_opt->count() > 0) options.neighbour_skin = neighbour_skin;
 
   try {
     if (bench->parsed()) return bench_command(bench_options);
+    if (resume->parsed()) return resume_command(resume_options);
     return run_command(options);
   } catch (const InputError& e) {
     print_error(e.what());

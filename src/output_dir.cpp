@@ -193,7 +193,7 @@ std::string remove_if_stale(const fs::path& dir, const std::string& rest) {
 
 /// Remove the staging directories of killed runs into `target`, and name the folders that look
 /// like them but are not sesi's to remove; one line on stderr.
-void clean_stale(const fs::path& parent, const fs::path& target) {
+void clean_stale(const fs::path& parent, const fs::path& target, const fs::path& resuming) {
   const fs::path shown = target.parent_path();  // as the user gave it ("" rather than ".")
   const std::string prefix = "." + target.filename().string() + ".sesi-";
   std::vector<std::string> removed, left;
@@ -201,6 +201,7 @@ void clean_stale(const fs::path& parent, const fs::path& target) {
   for (const fs::directory_entry& entry : fs::directory_iterator(parent, ec)) {
     const std::string name = entry.path().filename().string();
     if (!name.starts_with(prefix) || name == prefix + "lock") continue;
+    if (!resuming.empty() && entry.path().filename() == resuming.filename()) continue;  // sesi resume's source
     const std::string why = remove_if_stale(entry.path(), name.substr(prefix.size()));
     if (why.empty()) {
       removed.push_back((shown / name).string());
@@ -290,7 +291,8 @@ void DirLock::acquire(const fs::path& file, const std::string& key) {
   throw InputError(origin, key, "cannot lock " + file.string());
 }
 
-StagingDir::StagingDir(fs::path target, const std::string& option) : target_(std::move(target)) {
+StagingDir::StagingDir(fs::path target, const std::string& option, const fs::path& resuming)
+    : target_(std::move(target)) {
   const Origin origin{};
   const std::string key = option + " " + target_.string();
   std::error_code ec;
@@ -325,7 +327,7 @@ StagingDir::StagingDir(fs::path target, const std::string& option) : target_(std
     if (ec) throw InputError(origin, key, "cannot read the directory: " + ec.message());
     if (const auto id = identity(target_)) earlier_dir_ = *id;
   }
-  clean_stale(parent, target_);
+  clean_stale(parent, target_, resuming);
 
   std::string pattern = (parent / ("." + target_.filename().string() + ".sesi-XXXXXX")).string();
   if (mkdtemp(pattern.data()) == nullptr) {
@@ -401,6 +403,21 @@ fs::path StagingDir::publish_to(const fs::path& dest, const std::vector<Entry>& 
   fs::remove(dest / marker_name, ec);
   keep_others(old, dest, earlier);
   return dest;
+}
+
+bool remove_superseded(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::is_directory(fs::symlink_status(dir, ec))) return false;
+  std::vector<fs::path> files;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    if (!is_sesi_output(entry) && !is_sesi_temporary(entry)) return false;
+    files.push_back(entry.path());
+  }
+  if (ec) return false;
+  for (const fs::path& file : files) {
+    if (!fs::remove(file, ec) && ec) return false;
+  }
+  return fs::remove(dir, ec);
 }
 
 fs::path shown_path(const fs::path& path) {

@@ -49,7 +49,9 @@ class StagingDir {
   /// Check that target can be written (or replaced), lock it, clean up after killed runs, and
   /// create the staging directory.
   /// @throws InputError (exit status 2) naming `option` when target is unusable or in use
-  StagingDir(std::filesystem::path target, const std::string& option);
+  /// @param resuming a killed run's staging directory that `sesi resume` goes on from: left
+  ///        alone and not named
+  StagingDir(std::filesystem::path target, const std::string& option, const std::filesystem::path& resuming = {});
   /// Removes the staging directory unless it was published; releases the lock.
   ~StagingDir();
   StagingDir(const StagingDir&) = delete;
@@ -74,6 +76,11 @@ class StagingDir {
   std::pair<dev_t, ino_t> earlier_dir_{};  ///< the target directory itself then, if it existed
   bool published_ = false;
 };
+
+/// Remove `dir`, a stopped run's outputs that a resumed run has gone on from and published
+/// elsewhere (a killed run's staging directory, or DIR.incomplete), file by file, if it holds
+/// nothing but sesi outputs; otherwise leave it. Returns whether it was removed.
+bool remove_superseded(const std::filesystem::path& dir);
 
 /// `path` as the user should see it in a message: a path inside a live staging directory is
 /// shown inside its output directory (the --out the user gave), never the temporary name.

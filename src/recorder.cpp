@@ -78,7 +78,76 @@ Recorder::Recorder(const Scene& scene, std::filesystem::path dir, std::vector<st
   }
 }
 
+namespace {
+/// dir/name as the first `bytes` bytes of from_dir/name.
+void copy_prefix(const std::filesystem::path& from_dir, const std::filesystem::path& dir, const char* name,
+                 std::uint64_t bytes) {
+  std::error_code ec;
+  const std::filesystem::path from = from_dir / name;
+  const std::uintmax_t size = std::filesystem::file_size(from, ec);
+  if (ec || size < bytes) {
+    throw InputError(Origin{from.string()}, "",
+                     ec ? "missing, but the checkpoint goes on from it"
+                        : "shorter (" + std::to_string(size) + " bytes) than the checkpoint says (" +
+                              std::to_string(bytes) + ")");
+  }
+  std::filesystem::copy_file(from, dir / name, std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::resize_file(dir / name, bytes);
+}
+}  // namespace
+
+Recorder::Recorder(const Scene& scene, std::filesystem::path dir, std::vector<std::string> momentum_names,
+                   const Checkpoint& from, const std::filesystem::path& from_dir)
+    : scene_(scene),
+      dir_(std::move(dir)),
+      diagnostics_((copy_prefix(from_dir, dir_, "diagnostics.csv", from.outputs.diagnostics_bytes),
+                    dir_ / "diagnostics.csv")) {
+  if (scene.integrator.trajectory_format == TrajectoryFormat::h5md) {
+#ifdef SESI_HAVE_HDF5
+    trajectory_h5md_ = std::make_unique<H5mdWriter>(dir_ / "trajectory.h5", scene);
+    trajectory_h5md_->replay(from_dir / "trajectory.h5", from.outputs.trajectory_frames);
+#else
+    throw InputError(Origin{from_dir.string()}, "", "the run writes H5MD, and this sesi is built without HDF5");
+#endif
+  } else {
+    copy_prefix(from_dir, dir_, "trajectory.csv", from.outputs.trajectory_bytes);
+    trajectory_csv_.emplace(dir_ / "trajectory.csv");
+  }
+  frames_ = from.outputs.trajectory_frames;
+  stats_ = from.recorder.stats;
+  stats_.momentum_names = std::move(momentum_names);
+  tracking_ = from.recorder.tracking;
+  if (scene.exact == ExactSolution::paper) {
+    copy_prefix(from_dir, dir_, "exact.csv", from.outputs.exact_bytes);
+    exact_ = std::make_unique<ExactTrack>(dir_ / "exact.csv", from.recorder.exact_max_error,
+                                          from.recorder.exact_last_error);
+  }
+}
+
 Recorder::~Recorder() = default;
+
+RecorderState Recorder::state() const {
+  RecorderState out;
+  out.tracking = tracking_;
+  out.stats = stats_;
+  out.stats.momentum_names.clear();
+  if (exact_) {
+    out.exact_max_error = exact_->max_error();
+    out.exact_last_error = exact_->last_error();
+  }
+  return out;
+}
+
+OutputCursor Recorder::cursor() {
+  OutputCursor out;
+  if (trajectory_csv_) out.trajectory_bytes = trajectory_csv_->flushed_bytes();
+  // trajectory.h5 is not flushed here: its bytes would then depend on where checkpoints fell.
+  // A resumed run reads its frames back from the file a stopped run closed (H5mdWriter::replay).
+  out.trajectory_frames = frames_;
+  out.diagnostics_bytes = diagnostics_.flushed_bytes();
+  if (exact_) out.exact_bytes = exact_->flushed_bytes();
+  return out;
+}
 
 void Recorder::track(double energy, const Eigen::VectorXd& momentum) {
   if (!tracking_) {
@@ -116,6 +185,7 @@ void Recorder::write_row(const Snapshot& s) {
   row_.insert(row_.end(), s.momentum.data(), s.momentum.data() + s.momentum.size());
   diagnostics_.row(row_);
   if (exact_) exact_->row(s);
+  ++frames_;
 }
 
 void Recorder::set_final(Snapshot last) { final_ = std::move(last); }

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 
+#include "checkpoint.hpp"
 #include "csv_writer.hpp"
 #include "run_types.hpp"
 #include "scene.hpp"
@@ -37,6 +38,11 @@ class Recorder {
   /// Opens the output files in dir and writes their headers.
   /// @param momentum_names names of the momentum-map components (sesi::momentum_map's order)
   Recorder(const Scene& scene, std::filesystem::path dir, std::vector<std::string> momentum_names);
+  /// Go on from a checkpoint: the outputs in from_dir, cut to the checkpoint's lengths, are
+  /// copied into dir and extended; the statistics are the checkpoint's.
+  /// @throws InputError when an output in from_dir is missing or shorter than the checkpoint says
+  Recorder(const Scene& scene, std::filesystem::path dir, std::vector<std::string> momentum_names,
+           const Checkpoint& from, const std::filesystem::path& from_dir);
   ~Recorder();
 
   /// Every checked step, from the initial state on: conserved quantities for the summary's maxima.
@@ -49,6 +55,9 @@ class Recorder {
   void finish(const RunOutcome& outcome, double wall_seconds);
 
   const InvariantStats& invariants() const { return stats_; }
+  /// For a checkpoint: the statistics so far, and the outputs' lengths (flushed to the files).
+  RecorderState state() const;
+  OutputCursor cursor();
   /// Per body, the largest distance from the exact solution (empty without one).
   std::vector<double> max_exact_error() const;
 
@@ -61,6 +70,7 @@ class Recorder {
 #endif
   CsvWriter diagnostics_;
   std::unique_ptr<ExactTrack> exact_;
+  std::uint64_t frames_ = 0;  ///< rows written (trajectory.h5's frames)
   std::vector<double> row_;
   bool tracking_ = false;
   InvariantStats stats_;

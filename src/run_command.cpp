@@ -1,12 +1,12 @@
 #include "run_command.hpp"
 
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
+#include <optional>
 
 #include <sesi/parallel.hpp>
 
+#include "checkpoint.hpp"
 #include "errors.hpp"
 #include "integrator.hpp"
 #include "output_dir.hpp"
@@ -15,37 +15,12 @@
 #include "recorder.hpp"
 #include "run_loop.hpp"
 #include "scene_reader.hpp"
+#include "signals.hpp"
 #include "validate.hpp"
 
 namespace sesi::program {
 
 namespace {
-
-std::atomic<bool> interrupted{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
-
-extern "C" void on_signal(int) { interrupted.store(true, std::memory_order_relaxed); }
-
-/// SIGINT and SIGTERM stop the run between steps while this lives.
-class SignalGuard {
- public:
-  SignalGuard() {
-    struct sigaction action {};
-    action.sa_handler = on_signal;
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &old_int_);
-    sigaction(SIGTERM, &action, &old_term_);
-  }
-  ~SignalGuard() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-  SignalGuard(const SignalGuard&) = delete;
-  SignalGuard& operator=(const SignalGuard&) = delete;
-
- private:
-  struct sigaction old_int_ {}, old_term_ {};
-};
 
 /// Command-line values replace the scene's, checked by the same rules.
 void apply_overrides(Scene& scene, const RunOptions& options) {
@@ -74,6 +49,10 @@ void apply_overrides(Scene& scene, const RunOptions& options) {
   if (options.check_every) {
     check_check_every(*options.check_every, option, "--check-every");
     in.check_every = *options.check_every;
+  }
+  if (options.checkpoint_every) {
+    check_checkpoint_every(*options.checkpoint_every, option, "--checkpoint-every");
+    in.checkpoint_every = *options.checkpoint_every;
   }
   if (options.neighbour_skin) {
     check_neighbour_skin(*options.neighbour_skin, option, "--neighbour-skin");
@@ -115,39 +94,49 @@ void print_report(const Scene& scene, const Recorder& recorder, const RunOutcome
   std::fflush(stdout);
 }
 
-}  // namespace
 
-int run_command(const RunOptions& options) {
-  Scene scene = options.scene_path.empty() ? paper_scene() : read_scene_file(options.scene_path);
-  apply_overrides(scene, options);
-  const std::filesystem::path target =
-      options.out.empty() ? std::filesystem::path("sesi-out") / scene.name : std::filesystem::path(options.out);
-  StagingDir staging(target, options.out.empty() ? "output directory" : "--out");
-
+/// The run of scene into staging, from its start or from a checkpoint (in from_dir): outputs,
+/// checkpoints, publishing and the closing report. Returns the exit status.
+int execute(const Scene& scene, StagingDir& staging, bool quiet, const Checkpoint* from = nullptr,
+            const std::filesystem::path& from_dir = {}) {
   const bool euclidean = scene.space.kind == SpaceKind::euclidean;
   const int ambient = euclidean ? scene.dim() : scene.dim() + 1;
-  Recorder recorder(scene, staging.path(), momentum_names(ambient, euclidean));
+  std::optional<Recorder> recorder;
+  if (from) {
+    recorder.emplace(scene, staging.path(), momentum_names(ambient, euclidean), *from, from_dir);
+  } else {
+    recorder.emplace(scene, staging.path(), momentum_names(ambient, euclidean));
+  }
   const long steps = step_count(*scene.integrator.t_end, *scene.integrator.dt);
-  ProgressBar progress(steps, *scene.integrator.t_end, ProgressBar::wanted(options.quiet));
-  interrupted.store(false);
-  const SignalGuard signals;
+  ProgressBar progress(steps, *scene.integrator.t_end, ProgressBar::wanted(quiet));
 
   sesi::parallel::set_threads(scene.integrator.threads);
   const auto integrator = make_integrator(scene);
+  if (from) integrator->restore(from->state);
+  long checkpoint_step = -1;  // the last checkpoint written by this run
+  const auto checkpoint = [&](const Checkpoint& c) {
+    write_checkpoint(c, staging.path(), staging.target());
+    checkpoint_step = c.step;
+  };
   const auto start = std::chrono::steady_clock::now();
-  const RunOutcome outcome = run_loop(scene, *integrator, recorder, RunControl{&interrupted, &progress, {}});
+  const RunOutcome outcome =
+      run_loop(scene, *integrator, *recorder, RunControl{&signals::stop_requested(), &progress, {}, checkpoint}, from);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish();
-  recorder.finish(outcome, wall);
-  const std::filesystem::path dir = staging.publish(outcome.reason == StopReason::completed);
+  recorder->finish(outcome, wall);
+  const std::filesystem::path dir = staging.publish(outcome.complete());
 
+  const std::string kept =
+      checkpoint_step < 0 ? std::string()
+                          : "; resume from its checkpoint (step " + std::to_string(checkpoint_step) +
+                                ") with: sesi resume " + dir.string();
   switch (outcome.reason) {
     case StopReason::completed:
-      if (!options.quiet) print_report(scene, recorder, outcome, wall, dir);
+      if (!quiet) print_report(scene, *recorder, outcome, wall, dir);
       return exit_ok;
     case StopReason::interrupted:
       print_error(scene.name + ": interrupted after step " + std::to_string(outcome.steps_done) +
-                  "; the outputs so far are in " + dir.string() + ", marked incomplete");
+                  "; the outputs so far are in " + dir.string() + ", marked incomplete" + kept);
       return exit_interrupted;
     case StopReason::non_finite:
     case StopReason::invariant_failed:
@@ -159,8 +148,103 @@ int run_command(const RunOptions& options) {
               " (t = " + format_number(outcome.failed_t) + ")" +
               (outcome.failed_body > 0 ? ", body " + std::to_string(outcome.failed_body) : std::string()) +
               "; last step known good: " + std::to_string(outcome.steps_done) + "; the outputs up to it are in " +
-              dir.string() + ", marked incomplete");
+              dir.string() + ", marked incomplete" +
+              (checkpoint_step < 0 ? std::string()
+                                   : ", with the last good checkpoint (step " + std::to_string(checkpoint_step) + ")"));
   return exit_run_failed;
+}
+
+/// Where a checkpoint in source goes on to: a stopped run's own directory; for "DIR.incomplete"
+/// (a stopped re-run that left DIR's complete outputs alone) and for a killed run's staging
+/// directory ".DIR.sesi-XXXXXX", DIR.
+std::filesystem::path resume_target(const std::filesystem::path& source) {
+  const std::string name = source.filename().string();
+  // DIR.incomplete, or DIR.incomplete-N when that held a complete run (output_dir.hpp).
+  static constexpr std::string_view incomplete = ".incomplete";
+  if (const std::size_t at = name.rfind(incomplete); at != std::string::npos && at > 0) {
+    const std::string_view rest = std::string_view(name).substr(at + incomplete.size());
+    if (rest.empty() || (rest.size() > 1 && rest[0] == '-' &&
+                         rest.find_first_not_of("0123456789", 1) == std::string_view::npos)) {
+      return source.parent_path() / name.substr(0, at);
+    }
+  }
+  static constexpr std::string_view staging = ".sesi-";
+  const std::size_t at = name.rfind(staging);
+  if (name.size() > 1 && name.front() == '.' && at != std::string::npos && at > 1 &&
+      name.size() - at - staging.size() == 6) {
+    return source.parent_path() / name.substr(1, at - 1);
+  }
+  return source;
+}
+
+/// The directory whose checkpoint `sesi resume DIR` goes on from: DIR itself, else the staging
+/// directory of a killed run into DIR that holds the checkpoint with the latest step.
+std::filesystem::path checkpoint_source(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(dir / checkpoint_file_name, ec)) return dir;
+  fs::path parent = dir.parent_path();
+  if (parent.empty()) parent = ".";
+  const std::string prefix = "." + dir.filename().string() + ".sesi-";
+  fs::path best;
+  long best_step = -1;
+  for (const fs::directory_entry& entry : fs::directory_iterator(parent, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (!name.starts_with(prefix) || !fs::exists(entry.path() / checkpoint_file_name, ec)) continue;
+    try {
+      const long step = read_checkpoint(entry.path() / checkpoint_file_name).step;
+      if (step > best_step) {
+        best_step = step;
+        best = entry.path();
+      }
+    } catch (const InputError&) {
+      // not a usable checkpoint: the directory is left as it is
+    }
+  }
+  return best.empty() ? dir : best;
+}
+
+}  // namespace
+
+int run_command(const RunOptions& options) {
+  Scene scene = options.scene_path.empty() ? paper_scene() : read_scene_file(options.scene_path);
+  apply_overrides(scene, options);
+  const std::filesystem::path target =
+      options.out.empty() ? std::filesystem::path("sesi-out") / scene.name : std::filesystem::path(options.out);
+  signals::begin_run();  // from here a signal stops the run between steps, with a checkpoint
+  StagingDir staging(target, options.out.empty() ? "output directory" : "--out");
+  return execute(scene, staging, options.quiet);
+}
+
+int resume_command(const ResumeOptions& options) {
+  const std::filesystem::path source = checkpoint_source(options.dir);
+  Checkpoint checkpoint = read_checkpoint(source / checkpoint_file_name);
+  Scene& scene = checkpoint.scene;
+  const Origin option{};
+  check_method(scene.integrator.method, Origin{(source / checkpoint_file_name).string()}, "method");
+  if (options.t_end) {
+    check_t_end(*options.t_end, option, "--t-end");
+    check_step_count(*options.t_end, *scene.integrator.dt, option, "--dt/--t-end");
+    scene.integrator.t_end = options.t_end;
+  }
+  const long steps = step_count(*scene.integrator.t_end, *scene.integrator.dt);
+  if (steps < checkpoint.step) {
+    throw InputError(option, options.t_end ? "--t-end" : "t_end",
+                     "the checkpoint is at step " + std::to_string(checkpoint.step) + " (t = " +
+                         format_number(static_cast<double>(checkpoint.step) * *scene.integrator.dt) +
+                         "), after the end of the run (" + std::to_string(steps) + " steps)");
+  }
+  if (options.threads) {
+    check_threads(*options.threads, option, "--threads");
+    scene.integrator.threads = static_cast<int>(*options.threads);
+  }
+  signals::begin_run();
+  const std::filesystem::path target = resume_target(source);
+  StagingDir staging(target, "sesi resume", source.parent_path() == target.parent_path() ? source : std::filesystem::path());
+  const int status = execute(scene, staging, options.quiet, &checkpoint, source);
+  // A killed run's staging directory or DIR.incomplete, now gone on from into DIR.
+  if (status == exit_ok && source != staging.target()) remove_superseded(source);
+  return status;
 }
 
 }  // namespace sesi::program

@@ -1,6 +1,6 @@
 #pragma once
 /// @file run_command.hpp
-/// `sesi run`: read the scene (or take the default), apply the command-line overrides, run it
+/// `sesi run` and `sesi resume`: read the scene (or take the default), apply the command-line overrides, run it
 /// into a staging directory, publish the outputs, report. Returns the exit status
 /// (errors.hpp); bad input throws InputError before anything is written.
 
@@ -18,11 +18,23 @@ struct RunOptions {
   std::optional<long> output_every;
   std::optional<long> threads;
   std::optional<long> check_every;
+  std::optional<long> checkpoint_every;
   std::optional<double> neighbour_skin;
   std::optional<std::string> trajectory_format;
   bool quiet = false;
 };
 
 int run_command(const RunOptions& options);
+
+/// `sesi resume DIR`: go on from DIR's checkpoint (or from that of a killed run into DIR) to the
+/// end of the run, or to a later end; the outputs are extended as if the run had not stopped.
+struct ResumeOptions {
+  std::string dir;
+  std::optional<double> t_end;
+  std::optional<long> threads;
+  bool quiet = false;
+};
+
+int resume_command(const ResumeOptions& options);
 
 }  // namespace sesi::program

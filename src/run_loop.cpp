@@ -6,6 +6,7 @@
 
 #include <sesi/guard.hpp>
 
+#include "checkpoint.hpp"
 #include "errors.hpp"
 #include "geometry.hpp"
 #include "progress.hpp"
@@ -108,13 +109,18 @@ struct Schedule {
 
 long default_check_every(int bodies) { return bodies < many_bodies ? 1 : 20; }
 
-RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& recorder, const RunControl& control) {
+RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& recorder, const RunControl& control,
+                    const Checkpoint* from) {
   const Schedule schedule(*scene.integrator.dt, *scene.integrator.t_end);
   const long every = scene.integrator.output_every;
   const long check_every =
       scene.integrator.check_every > 0 ? scene.integrator.check_every : default_check_every(scene.body_count());
+  const long checkpoint_every = control.checkpoint ? scene.integrator.checkpoint_every : 0;
+  const long first = from ? from->step : 0;
 
   Snapshot s;
+  s.step = first;
+  s.t = schedule.time(first);
   integrator.read(s.q, s.p);
   s.energy = integrator.energy();
   if (!std::isfinite(s.energy)) {
@@ -126,28 +132,56 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& record
   s.momentum = integrator.momentum_map();
   s.x = integrator.points();
   s.v = integrator.velocities();
-  recorder.track(s.energy, s.momentum);
-  recorder.write_row(s);
+  // A resumed run's rows and statistics up to its checkpoint are in the recorder already.
+  if (!from) {
+    recorder.track(s.energy, s.momentum);
+    recorder.write_row(s);
+  }
 
   const Geometry geometry(scene.space);
-  const sesi::EnergyGuard<double> guard = energy_guard(scene, geometry, s);
+  const sesi::EnergyGuard<double> guard =
+      from ? sesi::EnergyGuard<double>(from->guard_energy, from->guard_scale,
+                                       scene.integrator.energy_guard.value_or(sesi::EnergyGuard<double>::default_relative))
+           : energy_guard(scene, geometry, s);
   const EncounterCheck encounters(scene, geometry);
+  // The checkpoint of the state after step k, with the outputs as the recorder has them now.
+  const auto take_checkpoint = [&](long k) {
+    Checkpoint c;
+    c.scene = scene;
+    c.scene.bodies.clear();  // the masses only: the state is the checkpoint's own
+    for (const Body& b : scene.bodies) c.scene.bodies.push_back(Body{b.mass, {}, {}});
+    c.guard_energy = guard.initial_energy();
+    c.guard_scale = guard.scale();
+    c.step = k;
+    c.state = integrator.framed_state();
+    c.outputs = recorder.cursor();
+    c.recorder = recorder.state();
+    control.checkpoint(c);
+  };
 
   RunOutcome outcome;
   // The last state that passed a check, and whether it is a row already. Checks (energy,
-  // momentum map, guard, close encounters) run every check_every steps, at every output row and
-  // at the last step; finiteness after every step. A failure names the step where it was found
-  // and this last step known good, and no row is written past it.
+  // momentum map, guard, close encounters) run every check_every steps, at every output row, at
+  // every checkpoint and at the last step; finiteness after every step. A failure names the step
+  // where it was found and this last step known good, and no row is written past it.
   Snapshot good = s;
-  bool good_written = true;
-  for (long k = 1; k <= schedule.steps; ++k) {
+  bool good_written = first % every == 0;
+  for (long k = first + 1; k <= schedule.steps; ++k) {
     if (control.interrupted && control.interrupted->load(std::memory_order_relaxed)) {
       outcome.reason = StopReason::interrupted;
       outcome.detail = "interrupted by a signal";
+      // The state after step k - 1 (finite; its energy is checked at the resumed run's checks),
+      // with the rows an uninterrupted run has written by then: the stop row comes after.
+      if (control.checkpoint) take_checkpoint(k - 1);
       break;
     }
-    const bool row = k % every == 0 || k == schedule.steps;
-    const bool check = row || k % check_every == 0;
+    const bool regular_row = k % every == 0;
+    const bool row = regular_row || k == schedule.steps;
+    // Checkpoints at multiples of checkpoint_every only (not at the last step): they are checked
+    // steps of any run of the scene, however long, so a longer run (sesi resume --t-end) goes on
+    // from the last one as if it had been one run.
+    const bool checkpoint = checkpoint_every > 0 && k % checkpoint_every == 0;
+    const bool check = row || checkpoint || k % check_every == 0;
     int bad_body = 0;
     try {
       integrator.step(schedule.time(k - 1), schedule.h(k));
@@ -167,7 +201,8 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& record
     if (bad_body != 0) {
       outcome.reason = StopReason::non_finite;
       outcome.failed_body = bad_body;
-      outcome.detail = "the state became non-finite";
+      const FramedState state = integrator.framed_state();  // where the value went bad
+      outcome.detail = non_finite_detail(state.q, state.p, bad_body, s.energy);
     } else if (outcome.reason == StopReason::completed && check) {
       // The close-encounter floor, then the energy guard (an encounter also spoils the energy).
       s.x = integrator.points();
@@ -196,7 +231,11 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& record
       integrator.read(s.q, s.p);
       s.v = integrator.velocities();
       recorder.track(s.energy, s.momentum);
+      // A checkpoint's outputs hold the regular rows only: the last step's extra row is cut on
+      // resume, since a longer run does not write it.
+      if (checkpoint && !regular_row) take_checkpoint(k);
       if (row) recorder.write_row(s);
+      if (checkpoint && regular_row) take_checkpoint(k);
       good_written = row;
       std::swap(good, s);
     }

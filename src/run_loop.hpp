@@ -21,7 +21,11 @@ inline constexpr int many_bodies = 1000;
 /// bodies (docs/benchmarks.md, "Checks").
 long default_check_every(int bodies);
 
-/// Run scene. Throws InputError (before any step) when the initial energy is not finite.
-RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& recorder, const RunControl& control);
+/// Run scene, from its initial state or, with `from`, from a checkpoint (whose state the
+/// integrator already holds and whose outputs the recorder goes on with): the run then goes on
+/// exactly as if it had not stopped. Throws InputError (before any step) when the initial
+/// energy is not finite.
+RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& recorder, const RunControl& control,
+                    const Checkpoint* from = nullptr);
 
 }  // namespace sesi::program

@@ -12,6 +12,7 @@
 namespace sesi::program {
 
 class ProgressBar;
+struct Checkpoint;
 
 /// The state of all bodies at one time, in chart and embedding coordinates.
 struct Snapshot {
@@ -43,6 +44,9 @@ struct RunControl {
   /// Called after each step k that passed its checks (after its output row, if any); for
   /// `sesi bench --scaling`, which times a window of steps inside one run.
   std::function<void(long k)> after_step;
+  /// Called with each checkpoint the run takes (every checkpoint_every steps, and at a signal);
+  /// writes it (checkpoint.hpp). Empty: none taken.
+  std::function<void(const Checkpoint&)> checkpoint;
 };
 
 /// What RunOutcome::detail says of a non-finite state: "the state became non-finite: body 3's

@@ -82,6 +82,9 @@ struct IntegratorSpec {
   /// Steps between the energy, momentum, guard and close-encounter checks (output rows are
   /// always checked); 0: the default, default_check_every(body count) (run_loop.cpp).
   long check_every = 0;
+  /// Steps between checkpoints (DIR/checkpoint, checkpoint.hpp); 0: none but the one written
+  /// when a signal stops the run. Checkpoint steps are checked steps.
+  long checkpoint_every = 0;
   /// Skin of the short-range terms' Verlet lists, a fraction of each term's cutoff (0: lists
   /// rebuilt every force evaluation); only the run time depends on it (System::set_neighbour_skin).
   double neighbour_skin = sesi::default_skin_fraction;

@@ -571,7 +571,8 @@ class SceneReader {
     scene_.integrator.line = in.origin().line;
     static constexpr std::array keys = {"method"sv,       "dt"sv,          "t_end"sv,
                                         "output_every"sv, "energy_guard"sv, "threads"sv,
-                                        "check_every"sv,  "trajectory_format"sv, "neighbour_skin"sv};
+                                        "check_every"sv,  "trajectory_format"sv, "neighbour_skin"sv,
+                                        "checkpoint_every"sv};
     in.allow_only(keys, "[integrator]");
     IntegratorSpec& spec = scene_.integrator;
     if (in.has("method")) {
@@ -598,6 +599,11 @@ class SceneReader {
     if (in.has("check_every")) {
       spec.check_every = in.integer("check_every", "an integer >= 1");
       check_check_every(spec.check_every, in.origin_of("check_every"), in.key_path("check_every"));
+    }
+    if (in.has("checkpoint_every")) {
+      spec.checkpoint_every = in.integer("checkpoint_every", "an integer >= 1");
+      check_checkpoint_every(spec.checkpoint_every, in.origin_of("checkpoint_every"),
+                             in.key_path("checkpoint_every"));
     }
     if (in.has("neighbour_skin")) {
       spec.neighbour_skin = in.number("neighbour_skin", "a number from 0 to 1");

@@ -55,6 +55,13 @@ void check_check_every(long check_every, const Origin& origin, std::string_view 
   }
 }
 
+void check_checkpoint_every(long checkpoint_every, const Origin& origin, std::string_view key) {
+  if (checkpoint_every < 1) {
+    throw InputError(origin, key,
+                     "expected an integer >= 1 (steps between checkpoints), got " + std::to_string(checkpoint_every));
+  }
+}
+
 void check_neighbour_skin(double skin, const Origin& origin, std::string_view key) {
   if (!(skin >= 0.0 && skin <= 1.0)) {
     throw InputError(origin, key,

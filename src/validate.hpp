@@ -23,6 +23,7 @@ void check_t_end(double t_end, const Origin& origin, std::string_view key);
 void check_threads(long threads, const Origin& origin, std::string_view key);
 /// check_every: >= 1.
 void check_check_every(long check_every, const Origin& origin, std::string_view key);
+void check_checkpoint_every(long checkpoint_every, const Origin& origin, std::string_view key);
 /// neighbour_skin: a number from 0 to 1.
 void check_neighbour_skin(double skin, const Origin& origin, std::string_view key);
 /// "csv" or "h5md" (h5md only in a build with HDF5).

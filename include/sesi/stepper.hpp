@@ -198,7 +198,8 @@ class Composition {
     const int top = sys.dim() - 1;
     const std::size_t s = w_.size();
     const bool reuse = q_unchanged && grad_.cols() == x.p.cols() && grad_.rows() == x.p.rows() &&
-                       grad_system_ == static_cast<const void*>(&sys) && grad_frames_ == x.frames;
+                       grad_system_ == static_cast<const void*>(&sys) && grad_frames_ == x.frames &&
+                       grad_clustered_ == x.clustered && (!x.clustered || grad_cluster_ == x.cluster);
     Scalar pending = w_[0] * dt / Scalar(2);  // half kick carried over from the last stage
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar h = w_[k] * dt;
@@ -220,6 +221,8 @@ class Composition {
     sys.kick_cached(x, pending, ws_, grad_);
     grad_system_ = &sys;
     grad_frames_ = x.frames;
+    grad_clustered_ = x.clustered;
+    if (x.clustered) grad_cluster_ = x.cluster;
   }
 
   weights_type w_;
@@ -230,6 +233,8 @@ class Composition {
   typename state_type::Matrix grad_;
   const void* grad_system_ = nullptr;
   std::vector<typename state_type::Frame> grad_frames_;
+  bool grad_clustered_ = false;  // and the cluster frame (State::cluster) it was taken in
+  typename state_type::Frame grad_cluster_;
 };
 
 /// The named methods (names as in the sesi program).
