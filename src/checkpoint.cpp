@@ -262,6 +262,7 @@ std::string body_text(const Checkpoint& c) {
   out.key("momentum_initial").vector(s.momentum_initial);
   out.key("momentum_final").vector(s.momentum_final);
   out.key("momentum_drift").num(s.max_momentum_drift);
+  out.key("max_distance").num(s.max_distance);
   out.key("exact_max").vector(c.recorder.exact_max_error);
   out.key("exact_last").vector(c.recorder.exact_last_error);
   out.key("end");
@@ -370,6 +371,8 @@ Checkpoint parse_body(std::string_view text) {
   s.momentum_final = in.eigen_vector(components);
   in.key("momentum_drift");
   s.max_momentum_drift = in.num();
+  in.key("max_distance");
+  s.max_distance = in.num();
   in.key("exact_max");
   c.recorder.exact_max_error = in.vector(bodies);
   in.key("exact_last");

@@ -1,5 +1,6 @@
 #include "recorder.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -169,6 +170,14 @@ void Recorder::track(double energy, const Eigen::VectorXd& momentum) {
 }
 
 void Recorder::write_row(const Snapshot& s) {
+  if (scene_.space.kind == SpaceKind::hyperbolic) {
+    // The distance from the chart's origin: R acosh(x_time / R), time-like coordinate last.
+    const double radius = scene_.space.radius;
+    for (Eigen::Index b = 0; b < s.x.cols(); ++b) {
+      const double far = radius * std::acosh(std::max(1.0, s.x(s.x.rows() - 1, b) / radius));
+      stats_.max_distance = std::max(stats_.max_distance, far);
+    }
+  }
   if (trajectory_csv_) {
     row_.assign(1, s.t);
     for (Eigen::Index b = 0; b < s.q.cols(); ++b) {

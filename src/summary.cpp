@@ -1,5 +1,8 @@
 #include "summary.hpp"
 
+#include <cmath>
+#include <limits>
+
 #include "json_writer.hpp"
 #include "methods.hpp"
 #include "validate.hpp"
@@ -39,6 +42,10 @@ int method_order(std::string_view name) {
   return 0;
 }
 }  // namespace
+
+double scene_chart_p_error(double distance, double radius) {
+  return std::numeric_limits<double>::epsilon() * std::exp(2.0 * distance / radius);
+}
 
 std::string summary_json(const SummaryData& d) {
   const Scene& scene = d.scene;
@@ -82,6 +89,14 @@ std::string summary_json(const SummaryData& d) {
   json.end_object();
 
   write_final_state(json, d.final_state);
+
+  if (scene.space.kind == SpaceKind::hyperbolic) {
+    // How far the q, p columns can be trusted (x and v are accurate at any distance).
+    json.begin_object("scene_chart");
+    json.number("max_distance", inv.max_distance);
+    json.number("p_relative_error", scene_chart_p_error(inv.max_distance, scene.space.radius));
+    json.end_object();
+  }
 
   if (!d.exact.solution.empty()) {
     json.begin_object("exact");

@@ -19,7 +19,15 @@ struct InvariantStats {
   std::vector<std::string> momentum_names;
   Eigen::VectorXd momentum_initial, momentum_final;
   double max_momentum_drift = 0.0;
+  /// H^n: the largest distance of a body from the scene chart's origin over the output rows,
+  /// where the q, p columns (the scene's chart) are read (scene_chart_p_error).
+  double max_distance = 0.0;
 };
+
+/// H^n: the relative error to expect of momenta p read in the scene's polar chart at distance d
+/// from its origin (radius R): eps e^{2 d / R}. The chart's p is recomputed from world points of
+/// size e^{d/R} whose O(1) differences cancel (docs/stability.md, "Far from the origin").
+double scene_chart_p_error(double distance, double radius);
 
 /// Distances from an exact solution (empty when the scene has none).
 struct ExactStats {

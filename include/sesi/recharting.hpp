@@ -107,7 +107,10 @@ bool recentre(const Sys& sys, State<typename Sys::Chart>& s,
       if (s.framed()) x = (s.frames[static_cast<std::size_t>(b)] * x).eval();
       mean += sys.mass(b) * x;
     }
-    const Scalar norm2 = -chart.inner(mean, mean);  // -<m,m>_L > 0 (a sum of future points)
+    // -<m,m>_L > 0 (a sum of future points), written out: GCC 12 warns falsely (array-bounds)
+    // on the vectorised dot of a dynamic head of this fixed-size vector once inlined here.
+    Scalar norm2 = mean[n] * mean[n];
+    for (int i = 0; i < n; ++i) norm2 -= mean[i] * mean[i];
     if (!(norm2 > Scalar(0))) return false;  // (NaN: leave the state to the finiteness check)
     const typename Chart::Ambient y = chart.radius() * mean / sqrt(norm2);
     // Its distance r from the frame's origin: cosh r = y_t / R.

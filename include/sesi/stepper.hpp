@@ -234,7 +234,7 @@ class Composition {
   const void* grad_system_ = nullptr;
   std::vector<typename state_type::Frame> grad_frames_;
   bool grad_clustered_ = false;  // and the cluster frame (State::cluster) it was taken in
-  typename state_type::Frame grad_cluster_;
+  typename state_type::Frame grad_cluster_ = state_type::identity_frame();
 };
 
 /// The named methods (names as in the sesi program).
