@@ -22,10 +22,6 @@ namespace sesi::program {
 
 namespace {
 
-/// summary.json's scene_chart.p_relative_error above which a run says so on stderr: momenta good
-/// to fewer than about 8 digits (eps e^{2d/R} > 1e-8 from d = 9.2 R on).
-constexpr double scene_chart_warning = 1e-8;
-
 /// Command-line values replace the scene's, checked by the same rules.
 void apply_overrides(Scene& scene, const RunOptions& options) {
   const Origin option{};
@@ -129,17 +125,6 @@ int execute(const Scene& scene, StagingDir& staging, bool quiet, const Checkpoin
   progress.finish();
   recorder->finish(outcome, wall);
   const std::filesystem::path dir = staging.publish(outcome.complete());
-  if (scene.space.kind == SpaceKind::hyperbolic) {
-    // Never silently wrong: the scene chart's q, p lose digits far from its origin.
-    const double distance = recorder->invariants().max_distance;
-    const double error = scene_chart_p_error(distance, scene.space.radius);
-    if (error > scene_chart_warning) {
-      std::fprintf(stderr,
-                   "sesi: warning: %s: bodies went %.3g from the chart origin, where the q, p columns "
-                   "(the scene's chart) hold p only to about %.1e relative; x and v are accurate\n",
-                   scene.name.c_str(), distance, error);
-    }
-  }
 
   const std::string kept =
       checkpoint_step < 0 ? std::string()

@@ -10,8 +10,12 @@ function(run)
   endif()
 endfunction()
 set(flags "-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer")
+# -O1 -g1 (line tables) as the sanitizers' own documentation suggests: on this machine it halves
+# clang's time on a template-heavy test file (tests/core/symplectic.cpp: 98 s against 184 s at
+# -O2 -g), which keeps `make test` within CI's budget; NDEBUG as in the main build.
 run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${dir} -G "Unix Makefiles"
     -D CMAKE_BUILD_TYPE=RelWithDebInfo
+    -D "CMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
     -D CMAKE_CXX_COMPILER=${CLANG}
     -D "CMAKE_CXX_FLAGS=${flags}"
     -D "CMAKE_EXE_LINKER_FLAGS=${flags}"
