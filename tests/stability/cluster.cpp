@@ -390,7 +390,14 @@ TEST_CASE("cluster frame: world points, velocities and the momentum map") {
   }
   const double rel = worst / expected.norm();
   report("cluster D = 20: momentum map against Ad_{C_D} of the origin run's (relative)", rel);
-  CHECK(rel <= 1e-13);
+  // Both sides are products of the local map with frames of size e^D that cancel to the far map's
+  // entries, in two groupings, (C_D B) M (C_D B)^T and C_D (B M B^T) C_D^T with B = s0.cluster
+  // (the re-centrings): each rounds to eps |C_D|^2 |B|^2 |M_local| with |M_local| <= |B|^2 |M0|
+  // (|B^-1| = |B| for a Lorentz matrix). GCC -O2 lands at 2e-15 relative, clang -O1 at 3e-7.
+  const double bound =
+      64 * stab::eps<double>() * cd.squaredNorm() * s0.cluster.squaredNorm() * s0.cluster.squaredNorm() * M0.norm();
+  report("cluster D = 20: momentum map difference / its rounding bound", worst / bound);
+  CHECK(worst <= bound);
 }
 
 TEST_CASE("cluster frame on H^3 and on a dynamic-size H^3: pair and centre at D = 20") {
