@@ -45,7 +45,9 @@ class ChartIntegrator final : public Integrator {
   explicit ChartIntegrator(const Scene& scene)
       : sys_(make_system(scene, make_chart<Chart>(scene.space))),
         x_(initial_state<Chart>(scene)),
-        stepper_(make_stepper(scene.integrator.method, sys_)) {}
+        stepper_(make_stepper(scene.integrator.method, sys_)) {
+    if constexpr (sesi::ClusterChart<Chart>) enter_cluster_frame(scene);
+  }
   ChartIntegrator(const ChartIntegrator&) = delete;
   ChartIntegrator& operator=(const ChartIntegrator&) = delete;
 
@@ -60,6 +62,22 @@ class ChartIntegrator final : public Integrator {
   double energy() override { return sys_.energy(x_, w_); }
   Eigen::VectorXd momentum_map() override { return sesi::momentum_map(sys_, x_); }
   Eigen::MatrixXd points() override { return sesi::embedding_points(sys_, x_); }
+  // (A cluster frame at the identity, as every H^n scene near the origin has, changes nothing.)
+  bool clustered() const override { return x_.clustered && !x_.cluster.isIdentity(0.0); }
+  Eigen::MatrixXd local_points() override {
+    sys_.embed_all(x_, w_);
+    return w_.X;
+  }
+  Eigen::VectorXd to_local(const Eigen::VectorXd& world) const override {
+    if constexpr (sesi::ClusterChart<Chart>) {
+      if (clustered()) {
+        typename Chart::Ambient c = world, out;
+        sys_.chart().to_frame(x_.cluster, c, out);
+        return out;
+      }
+    }
+    return world;
+  }
   Eigen::MatrixXd velocities() override { return sesi::embedding_velocities(sys_, x_); }
   int body_with_non_finite_energy() override {
     typename Chart::Point q(sys_.dim()), p(sys_.dim());
@@ -91,7 +109,7 @@ class ChartIntegrator final : public Integrator {
   /// In the scene's own chart: bodies re-charted by the stepper are mapped back (q and p of
   /// the outputs and of summary.json always mean the same coordinates).
   void read(Eigen::MatrixXd& q, Eigen::MatrixXd& p) const override {
-    if (x_.framed()) {
+    if (x_.framed() || x_.clustered) {
       const auto world = sesi::in_world_chart(sys_, x_);
       q = world.q;
       p = world.p;
@@ -102,6 +120,22 @@ class ChartIntegrator final : public Integrator {
   }
 
  private:
+  /// H^n: the bodies go into a cluster frame (docs/charts.md) at the scene's first force centre,
+  /// or else at the bodies' centre; at the origin it is the identity (nothing changes until
+  /// the cluster drifts 2 R away and re-centres). Far out, each body is re-read from its world
+  /// point and velocity without cancellation, so pair chords and central terms are O(1).
+  void enter_cluster_frame(const Scene& scene) {
+    const sesi::RechartPolicy<double> policy{};
+    for (const PotentialSpec& spec : scene.potentials) {
+      if (const auto* central = std::get_if<CentralCotangentSpec>(&spec)) {
+        const typename Chart::Ambient c = central->center;
+        sesi::enter_cluster_frame(sys_, x_, policy, &c);
+        return;
+      }
+    }
+    sesi::enter_cluster_frame(sys_, x_, policy);
+  }
+
   SystemOf<Chart> sys_;
   sesi::State<Chart> x_;
   std::unique_ptr<AnyStepper<SystemOf<Chart>>> stepper_;  // refers to sys_

@@ -83,7 +83,17 @@ double Geometry::kinetic_energy(const Vector& q, const Vector& p, double m) cons
 }
 
 double Geometry::distance(const Vector& x, const Vector& y) const {
-  return std::visit([&](const auto& chart) { return chart.distance(x, y); }, chart_);
+  return std::visit(
+      [&](const auto& chart) {
+        // H^n: by radii and directions, so a scene's bodies far out are not measured with the
+        // chord's cancellation of e^{2r} (docs/charts.md, "The cluster frame").
+        if constexpr (requires { chart.polar_distance(x, y); }) {
+          return chart.polar_distance(x, y);
+        } else {
+          return chart.distance(x, y);
+        }
+      },
+      chart_);
 }
 
 std::vector<std::pair<int, int>> Geometry::close_pairs(const Eigen::MatrixXd& X, double reach, bool antipodal) const {
@@ -96,7 +106,26 @@ std::vector<std::pair<int, int>> Geometry::close_pairs(const Eigen::MatrixXd& X,
         sesi::NeighbourIndex<Chart> index;
         sesi::NeighbourLists lists;
         if (!antipodal) {
-          index.build(chart, X, reach, lists);
+          if constexpr (requires { chart.polar_distance(X.col(0), X.col(0)); }) {
+            // H^n with the first body far out: the index sees the points read into a frame at
+            // that body (to_frame, no cancellation), so a compact cluster far from the origin is
+            // searched as one near it; world chords there would lose eps e^{2r}.
+            const Eigen::Index t = X.rows() - 1;
+            if (X(t, 0) / space_.radius > std::cosh(2.0)) {
+              Eigen::MatrixXd frame, local(X.rows(), n);
+              Eigen::VectorXd point;
+              chart.boost_to(X.col(0), frame);
+              for (int b = 0; b < n; ++b) {
+                chart.to_frame(frame, Eigen::VectorXd(X.col(b)), point);
+                local.col(b) = point;
+              }
+              index.build(chart, local, reach, lists);
+            } else {
+              index.build(chart, X, reach, lists);
+            }
+          } else {
+            index.build(chart, X, reach, lists);
+          }
           for (int i = 0; i < n; ++i) {
             for (int k = lists.begin(i); k < lists.end(i); ++k) {
               if (lists.index[static_cast<std::size_t>(k)] > i) out.emplace_back(i, lists.index[static_cast<std::size_t>(k)]);

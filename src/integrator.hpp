@@ -42,6 +42,13 @@ class Integrator {
   /// Embedding points and velocities in world coordinates (ambient x bodies).
   virtual Eigen::MatrixXd points() = 0;
   virtual Eigen::MatrixXd velocities() = 0;
+  /// H^n: whether the bodies are held in a cluster frame (sesi::State::cluster). The points the
+  /// potentials see are then local_points(), O(1) for a compact cluster however far out (the
+  /// close-encounter check measures those), and to_local moves a world point (a force centre)
+  /// into the same frame. Without a cluster frame both are the world's.
+  virtual bool clustered() const = 0;
+  virtual Eigen::MatrixXd local_points() = 0;
+  virtual Eigen::VectorXd to_local(const Eigen::VectorXd& world) const = 0;
   /// The state as stepped, and its restoration (a checkpoint's; the run goes on bit for bit as
   /// if it had not stopped: the stepper's caches are recomputed from it alike).
   virtual FramedState framed_state() const = 0;

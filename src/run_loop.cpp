@@ -29,9 +29,10 @@ class EncounterCheck {
   }
   bool active() const { return !terms_.empty(); }
 
-  /// The encounter deepest below its floor among the points x (ambient x bodies), as the detail
-  /// of the run's failure, or "" when none.
-  std::string check(const Eigen::MatrixXd& x) const {
+  /// The encounter deepest below its floor among the points x (ambient x bodies; the
+  /// integrator's local points, force centres moved there by its to_local), as the detail of
+  /// the run's failure, or "" when none.
+  std::string check(const Eigen::MatrixXd& x, const Integrator& integrator) const {
     double worst = 1.0;
     std::string detail;
     const auto consider = [&](const Term& t, double d, int i, int j) {
@@ -55,9 +56,10 @@ class EncounterCheck {
     for (const Term& t : terms_) {
       const PotentialSpec& spec = scene_.potentials[t.index];
       if (const auto* central = std::get_if<CentralCotangentSpec>(&spec)) {
+        const Eigen::VectorXd centre = integrator.to_local(central->center);
         for (Eigen::Index i = 0; i < x.cols(); ++i) {
           a = x.col(i);
-          consider(t, geometry_.distance(a, central->center), static_cast<int>(i) + 1, 0);
+          consider(t, geometry_.distance(a, centre), static_cast<int>(i) + 1, 0);
         }
         continue;
       }
@@ -207,7 +209,9 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& record
       // The close-encounter floor, then the energy guard (an encounter also spoils the energy).
       s.x = integrator.points();
       if (encounters.active()) {
-        if (std::string detail = encounters.check(s.x); !detail.empty()) {
+        const std::string detail =
+            integrator.clustered() ? encounters.check(integrator.local_points(), integrator) : encounters.check(s.x, integrator);
+        if (!detail.empty()) {
           outcome.reason = StopReason::close_encounter;
           outcome.detail = std::move(detail);
         }

@@ -33,6 +33,7 @@ class PairSum {
 
   void add(Term term) { terms_.push_back(std::move(term)); }
   bool empty() const { return terms_.empty(); }
+
   const std::vector<Term>& terms() const { return terms_; }
 
   template <class Space>
@@ -126,6 +127,24 @@ class ExternalTerms {
 
   void add(Term term) { terms_.push_back(std::move(term)); }
   bool empty() const { return terms_.empty(); }
+
+  /// Every term has a force centre: in a cluster frame (H^n) the system evaluates the terms
+  /// with their centres moved into it (sesi::System::has_movable_center).
+  bool has_centres() const { return !terms_.empty(); }
+  template <class Frame>
+    requires requires(const Chart& c, const Frame& f, Ambient& a) { c.to_frame(f, a, a); }
+  ExternalTerms in_frame(const Chart& space, const Frame& frame) const {
+    ExternalTerms out = *this;
+    for (Term& term : out.terms_) {
+      std::visit(
+          [&](auto& t) {
+            const Ambient world = t.center;
+            space.to_frame(frame, world, t.center);
+          },
+          term);
+    }
+    return out;
+  }
 
   double value(const Chart& space, const Ambient& x, double m) const {
     double v = 0.0;

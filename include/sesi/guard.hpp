@@ -201,9 +201,20 @@ Encounter<typename Sys::Scalar> closest_encounter(const Sys& sys, const State<ty
                   }
                 } else if constexpr (SingularExternalTerm<T, Chart>) {
                   const Scalar floor = t.encounter_floor(chart);
-                  for (int i = 0; i < sys.bodies(); ++i) {
-                    w.x = w.X.col(i);
-                    consider(i, -1, index, t.singular_gap(chart, w.x), floor);
+                  // w.X holds cluster-local points when s.clustered: a centre goes into the
+                  // cluster's frame as the system evaluates it, otherwise the points go to the world.
+                  if constexpr (requires { sys.in_cluster_frame(t, w); }) {
+                    const T local = sys.in_cluster_frame(t, w);
+                    for (int i = 0; i < sys.bodies(); ++i) {
+                      w.x = w.X.col(i);
+                      consider(i, -1, index, local.singular_gap(chart, w.x), floor);
+                    }
+                  } else {
+                    for (int i = 0; i < sys.bodies(); ++i) {
+                      w.x = w.X.col(i);
+                      if (s.clustered) w.x = (s.cluster * w.x).eval();
+                      consider(i, -1, index, t.singular_gap(chart, w.x), floor);
+                    }
                   }
                 }
                 ++index;

@@ -72,6 +72,35 @@ concept ClusterChart = EmbeddedChart<C> && requires(const C& c, const typename C
   c.boost_to(y, b);
 };
 
+namespace detail {
+/// The centre of s's bodies in the cluster's frame: the mass-weighted Minkowski mean of their
+/// cluster-local points F_b embed(q_b), normalised onto the hyperboloid (the centre of mass of
+/// the hyperboloid model). False when it is not a future point (or not finite).
+template <class Sys>
+bool cluster_centre(const Sys& sys, const State<typename Sys::Chart>& s, typename Sys::Chart::Ambient& y) {
+  using Chart = typename Sys::Chart;
+  using Scalar = typename Sys::Scalar;
+  using std::sqrt;
+  const Chart& chart = sys.chart();
+  const int a = chart.ambient_dim(), n = chart.dim();
+  typename Chart::Point q(n);
+  typename Chart::Ambient x(a), mean = Chart::Ambient::Zero(a);
+  for (int b = 0; b < s.bodies(); ++b) {
+    q = s.q.col(b);
+    chart.embed(q, x);
+    if (s.framed()) x = (s.frames[static_cast<std::size_t>(b)] * x).eval();
+    mean += sys.mass(b) * x;
+  }
+  // -<m,m>_L > 0 (a sum of future points), written out: GCC 12 warns falsely (array-bounds)
+  // on the vectorised dot of a dynamic head of this fixed-size vector once inlined here.
+  Scalar norm2 = mean[n] * mean[n];
+  for (int i = 0; i < n; ++i) norm2 -= mean[i] * mean[i];
+  if (!(norm2 > Scalar(0))) return false;
+  y = chart.radius() * mean / sqrt(norm2);
+  return true;
+}
+}  // namespace detail
+
 /// Re-centre the cluster frame of s (State::cluster) when the centre of the bodies'
 /// cluster-local points x_b = F_b embed(q_b) -- their mass-weighted Minkowski mean, normalised
 /// onto the hyperboloid (the centre of mass of the hyperboloid model) -- lies farther than
@@ -81,38 +110,24 @@ concept ClusterChart = EmbeddedChart<C> && requires(const C& c, const typename C
 /// of the local points' mutual distances (and of the centres moved with C), is unchanged: a
 /// change of world coordinates, not of the dynamics, so the method stays symplectic and
 /// reversible. Returns whether it re-centred. Nothing happens without a cluster frame, nor for
-/// a system with force centres (System::has_movable_centres): its frame stays at the centre,
+/// a system with force centres (System::has_movable_centres()): its frame stays at the centre,
 /// where the centre is exact, since a far centre off the frame's origin is known only to
 /// eps sinh D (Hyperbolic::to_frame).
 template <class Sys>
 bool recentre(const Sys& sys, State<typename Sys::Chart>& s,
               const RechartPolicy<typename Sys::Scalar>& policy) {
   using Chart = typename Sys::Chart;
-  using Scalar = typename Sys::Scalar;
   if constexpr (ClusterChart<Chart>) {
     if (!s.clustered || s.bodies() == 0) return false;
     // A system with force centres keeps its frame where it was put (see has_movable_centres).
-    if constexpr (requires { Sys::has_movable_centres; }) {
-      if (Sys::has_movable_centres) return false;
+    if constexpr (requires { sys.has_movable_centres(); }) {
+      if (sys.has_movable_centres()) return false;
     }
     using std::cosh;
-    using std::sqrt;
     const Chart& chart = sys.chart();
     const int a = chart.ambient_dim(), n = chart.dim();
-    typename Chart::Point q(n);
-    typename Chart::Ambient x(a), mean = Chart::Ambient::Zero(a);
-    for (int b = 0; b < s.bodies(); ++b) {
-      q = s.q.col(b);
-      chart.embed(q, x);
-      if (s.framed()) x = (s.frames[static_cast<std::size_t>(b)] * x).eval();
-      mean += sys.mass(b) * x;
-    }
-    // -<m,m>_L > 0 (a sum of future points), written out: GCC 12 warns falsely (array-bounds)
-    // on the vectorised dot of a dynamic head of this fixed-size vector once inlined here.
-    Scalar norm2 = mean[n] * mean[n];
-    for (int i = 0; i < n; ++i) norm2 -= mean[i] * mean[i];
-    if (!(norm2 > Scalar(0))) return false;  // (NaN: leave the state to the finiteness check)
-    const typename Chart::Ambient y = chart.radius() * mean / sqrt(norm2);
+    typename Chart::Ambient y(a);
+    if (!detail::cluster_centre(sys, s, y)) return false;  // (NaN: left to the finiteness check)
     // Its distance r from the frame's origin: cosh r = y_t / R.
     if (!(y[n] / chart.radius() > cosh(policy.cluster_radius))) return false;
     typename State<Chart>::Frame boost(a, a);
@@ -128,6 +143,83 @@ bool recentre(const Sys& sys, State<typename Sys::Chart>& s,
     static_cast<void>(sys);
     static_cast<void>(s);
     static_cast<void>(policy);
+    return false;
+  }
+}
+
+/// Put s -- bodies given in the space's own chart (no frames, no cluster frame), e.g. read
+/// from world coordinates -- into a cluster frame (State::cluster) at `at`, or by default at the
+/// centre of the bodies (as recentre() computes it). A system with force centres should pass
+/// its centre: its frame stays there (recentre). When that point lies within
+/// policy.cluster_radius of the origin, C = I: the run is the one without a cluster frame, bit
+/// for bit, until it first re-centres. Otherwise C = B(y), the standard boost to it, and each
+/// body is re-read in the frame from its world point and velocity by Chart::to_frame (no
+/// cancellation: an error eps sinh D at distance D, what world coordinates resolve there) with
+/// identity body frames. Returns whether the frame was moved from the origin; charts without a
+/// cluster frame (S^n, E^n) and states already framed are left as they are.
+template <class Sys>
+bool enter_cluster_frame(const Sys& sys, State<typename Sys::Chart>& s,
+                         const RechartPolicy<typename Sys::Scalar>& policy,
+                         const typename Sys::Chart::Ambient* at = nullptr) {
+  using Chart = typename Sys::Chart;
+  if constexpr (ClusterChart<Chart>) {
+    if (s.framed() || s.clustered) return false;
+    using std::cosh;
+    const Chart& chart = sys.chart();
+    const int a = chart.ambient_dim(), n = chart.dim();
+    typename Chart::Ambient y(a);
+    // Near the origin or not? The world centre of mass is accurate near the origin; far out its
+    // -<m,m>_L cancels to at most eps |m|^2, so it comes out far (or not at all) there too.
+    // (A sum of future points is a future point: only that cancellation, or a NaN, makes
+    // cluster_centre fail.)
+    bool far = false;
+    if (at) {
+      y = *at;
+      far = y[n] / chart.radius() > cosh(policy.cluster_radius);
+    } else if (s.bodies() > 0 && s.q.allFinite() && s.p.allFinite()) {
+      far = !detail::cluster_centre(sys, s, y) || y[n] / chart.radius() > cosh(policy.cluster_radius);
+    }
+    if (!far) {
+      s.set_cluster(State<Chart>::Frame::Identity(a, a));
+      return false;
+    }
+    // Far out: the frame at the given centre, or first at body 0's point (read exactly there)
+    // and then, by recentre() on the cluster-local points, at the bodies' centre.
+    if (!at) chart.embed(typename Chart::Point(s.q.col(0)), y);
+    typename State<Chart>::Frame c(a, a);
+    chart.boost_to(y, c);
+    typename Chart::Point q(n), p(n);
+    typename Chart::Ambient x(a), v(a), xl(a), vl(a);
+    for (int b = 0; b < s.bodies(); ++b) {
+      q = s.q.col(b);
+      p = s.p.col(b);
+      chart.embed(q, x);
+      chart.velocity(q, p, sys.mass(b), v);
+      chart.to_frame(c, x, v, xl, vl);
+      chart.chart(xl, q);
+      if constexpr (Rechartable<Chart>) {
+        // At (or near) the frame's origin, the chart's polar singularity: home the body there
+        // (its own frame), as re-charting would.
+        if (chart.dim() >= 2 && q[0] < policy.min_radius) {
+          if (!s.framed()) s.enable_frames(a);
+          chart.home(xl, vl, sys.mass(b), policy, s.frames[static_cast<std::size_t>(b)], q, p);
+          s.q.col(b) = q;
+          s.p.col(b) = p;
+          continue;
+        }
+      }
+      chart.momentum(q, vl, sys.mass(b), p);
+      s.q.col(b) = q;
+      s.p.col(b) = p;
+    }
+    s.set_cluster(c);
+    if (!at) recentre(sys, s, policy);
+    return true;
+  } else {
+    static_cast<void>(sys);
+    static_cast<void>(s);
+    static_cast<void>(policy);
+    static_cast<void>(at);
     return false;
   }
 }

@@ -132,20 +132,29 @@ class System {
 
   static constexpr bool has_potential = sizeof...(Terms) > 0;
 
-  /// External terms with a public force centre (`center`, a world point) whose value depends on
-  /// the distance to it only (CentralCotangent): in a cluster frame they are evaluated with the
-  /// centre moved into the cluster's frame, C^{-1} c, computed by the chart without cancellation
-  /// (Hyperbolic::to_frame), so a centre near the cluster is O(1) like the bodies.
+  /// External terms with force centres that a cluster frame can move: a public world centre
+  /// `center` on which the value depends through the distance only (CentralCotangent), or an
+  /// aggregate that moves its own (`in_frame(chart, C)`, the term as seen from the frame C, and
+  /// `has_centres()`, e.g. the program's list of a scene's external terms). In a cluster frame
+  /// they are evaluated with the centres moved into the cluster's frame, C^{-1} c, computed by
+  /// the chart without cancellation (Hyperbolic::to_frame), so a centre near the cluster is O(1)
+  /// like the bodies.
+  using Frame = Eigen::Matrix<Scalar, ambient_dimension, ambient_dimension>;
   template <class Term>
   static constexpr bool has_movable_center =
-      requires(Term t, const Chart& c,
-               const Eigen::Matrix<Scalar, ambient_dimension, ambient_dimension>& frame) {
-        c.to_frame(frame, t.center, t.center);
+      requires(Term t, const Chart& c, const Frame& frame) { c.to_frame(frame, t.center, t.center); } ||
+      requires(const Term& t, const Chart& c, const Frame& frame) {
+        { t.in_frame(c, frame) } -> std::same_as<Term>;
+        { t.has_centres() } -> std::convertible_to<bool>;
       };
   /// Whether some term has such a centre: then a cluster frame stays where it was put (at the
   /// centre; sesi::recentre), since a far centre off the frame's origin is known only to
   /// eps sinh D (docs/charts.md).
-  static constexpr bool has_movable_centres = (has_movable_center<Terms> || ... || false);
+  bool has_movable_centres() const {
+    bool any = false;
+    std::apply([&](const auto&... term) { ((any = any || has_centres_of(term)), ...); }, terms_);
+    return any;
+  }
   /// The term as the system evaluates it on w's cluster-local points: with the centre moved
   /// into the cluster frame when w.clustered (for a check on w.X, e.g. a close-encounter floor).
   template <class Term>
@@ -733,9 +742,23 @@ class System {
   /// The term with its centre in the cluster's frame (w.cluster).
   template <class Term>
   Term localized(const Term& term, const Workspace& w) const {
-    Term local = term;
-    chart_.to_frame(w.cluster, term.center, local.center);
-    return local;
+    if constexpr (requires { term.in_frame(chart_, w.cluster); }) {
+      return term.in_frame(chart_, w.cluster);
+    } else {
+      Term local = term;
+      chart_.to_frame(w.cluster, term.center, local.center);
+      return local;
+    }
+  }
+  template <class Term>
+  static bool has_centres_of(const Term& term) {
+    if constexpr (!has_movable_center<Term>) {
+      return false;
+    } else if constexpr (requires { term.has_centres(); }) {
+      return term.has_centres();
+    } else {
+      return true;
+    }
   }
 
   Chart chart_;

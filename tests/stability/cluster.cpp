@@ -440,3 +440,102 @@ TEST_CASE("cluster frame on H^3 and on a dynamic-size H^3: pair and centre at D 
   check_dim(sesi::Hyperbolic<3, double>(1.0));
   check_dim(sesi::HyperbolicXd(1.0, 3));
 }
+
+TEST_CASE("to_frame with a velocity: a far body read into a cluster frame without cancellation") {
+  // A body at distance 0.5 from the frame's origin with an O(1) velocity, moved out by a frame
+  // rotation x boost(D) x rotation: its world x and v (entries ~e^D) are read back into the
+  // frame. The matrix product C^{-1} v would lose eps e^{2D}; the closed form eps sinh D.
+  const Chart chart(1.0);
+  const Amb xl = point(0.5, 1.3), vl = velocity(0.5, 1.3, 0.3, -0.7);
+  const Frame turn1 = stab::givens<double>(3, 0, 1, 0.7), turn2 = stab::givens<double>(3, 0, 1, -2.1);
+  for (double D : {0.5, 1.5, 10.0, 20.0, 30.0}) {
+    const Frame c = turn1 * far_frame(D) * turn2;
+    const Amb x = c * xl, v = c * vl;
+    Amb xo, vo;
+    chart.to_frame(c, x, v, xo, vo);
+    const double scale = stab::eps<double>() * std::sinh(std::max(D, 1.0));
+    const double ex = chart.distance(xo, xl), ev = (vo - vl).norm();
+    report("to_frame with v, D = " + std::to_string(D).substr(0, 4) + ": point error / (eps sinh D)", ex / scale);
+    report("to_frame with v, D = " + std::to_string(D).substr(0, 4) + ": velocity error / (eps sinh D)", ev / scale);
+    CHECK(ex <= 16 * scale);
+    CHECK(ev <= 64 * scale);
+    CHECK(std::abs(chart.tangency(xo, vo)) <= 16 * stab::eps<double>() * xo.norm() * vo.norm());
+    if (D >= 10) {  // the product's loss, for contrast
+      Frame inverse = c.transpose();
+      inverse.row(2) = -inverse.row(2);
+      inverse.col(2) = -inverse.col(2);
+      const Amb naive = inverse * v;
+      report("naive C^-1 v, D = " + std::to_string(int(D)) + ": velocity error", (naive - vl).norm());
+    }
+  }
+}
+
+TEST_CASE("enter_cluster_frame: a pair and an orbit given in world coordinates far out") {
+  // The far systems of the tests above, but given as a user gives a scene: world points and
+  // velocities (entries ~e^D), read into the space's own chart, then put into a cluster frame by
+  // enter_cluster_frame. What world coordinates resolve far out bounds the result: the initial
+  // state is known to ~eps sinh D (to_frame), and that error is carried along the run; within
+  // that, the far runs match the origin's.
+  const Frame turn = stab::givens<double>(3, 0, 1, 0.4);
+  const sesi::RechartPolicy<double> policy;
+  const auto go = [&](const char* name, auto make, const Mat<double>& X, const Mat<double>& V, bool with_centre,
+                      double dt, long steps) {
+    std::vector<double> ref;
+    {
+      const Amb o(0, 0, 1);
+      const auto sys = make(o);
+      run(sys, near_state(sys, X, V), dt / 4, 4 * steps, with_centre ? &o : nullptr, nullptr, &ref);
+    }
+    const Amb o(0, 0, 1);
+    const auto sys0 = make(o);
+    auto s0 = near_state(sys0, X, V);
+    CHECK_FALSE(sesi::enter_cluster_frame(sys0, s0, policy));  // at the origin: C = I
+    CHECK(s0.clustered);
+    const Errors origin = run(sys0, s0, dt, steps, with_centre ? &o : nullptr, &ref);
+    for (double D : {10.0, 16.0, 20.0}) {
+      const Frame c = turn * far_frame(D);
+      const Mat<double> Xw = c * X, Vw = c * V;
+      const Amb centre = c.col(2);
+      const auto sys = make(centre);
+      auto s = near_state(sys, Xw, Vw);  // the space's own chart, as the program reads a scene
+      CHECK(sesi::enter_cluster_frame(sys, s, policy, with_centre ? &centre : nullptr));
+      Amb local_centre(3);
+      sys.chart().to_frame(s.cluster, centre, local_centre);
+      const Errors e = run(sys, s, dt, steps, with_centre ? &centre : nullptr, &ref);
+      const double input = 64 * stab::eps<double>() * std::sinh(D);
+      const std::string tag = std::string("entered ") + name + " D = " + std::to_string(int(D));
+      report(tag + ": invariant error", e.invariant);
+      report(tag + ": energy error", e.energy);
+      CHECK(e.invariant <= 10 * origin.invariant + input);
+      CHECK(e.energy <= 10 * origin.energy + input);
+    }
+  };
+  Mat<double> X, V;
+  pair_scene(X, V);
+  go("harmonic pair", pair_system, X, V, false, 0.01, 500);
+  orbit_scene(X, V);
+  go("central orbit", orbit_system, X, V, true, 0.01, 500);
+}
+
+TEST_CASE("closest_encounter in a cluster frame: the centre moved into the frame") {
+  // A body 0.3 from a central-cotangent centre at D = 20, in the frame at the centre: with a
+  // floor of 0.5 the encounter is found at the local distance 0.3; with 0.2 none is. (Measured
+  // against the world centre, the local point would be ~20 away and never found.)
+  const Frame c = far_frame(20.0);
+  sesi::CentralCotangent<Chart> term;
+  term.k = 1.0;
+  term.center = c.col(2);
+  term.min_distance = 0.5;
+  const auto sys = sesi::System(Chart(1.0), std::vector<double>{1.0}, term);
+  Mat<double> X(3, 1), V(3, 1);
+  X.col(0) = point(0.3, 0.4);
+  V.col(0) = velocity(0.3, 0.4, 0.0, 0.5);
+  auto s = moved(near_state(sys, X, V), 20.0);
+  const auto e = sesi::closest_encounter(sys, s);
+  REQUIRE(e.found());
+  CHECK(e.second == -1);
+  CHECK(std::abs(e.gap - 0.3) <= 1e-12);
+  term.min_distance = 0.2;
+  const auto sys2 = sesi::System(Chart(1.0), std::vector<double>{1.0}, term);
+  CHECK_FALSE(sesi::closest_encounter(sys2, s).found());
+}

@@ -177,11 +177,18 @@ class Hyperbolic {
     detail::unit_sphere_angles(x, 1, dim_, q);
   }
   /// Conjugate momenta of a tangent velocity: p = m J^T eta v (the metric is J^T eta J).
+  /// Far out, p_1 = m R (cosh q_1 u.v_s - sinh q_1 v_t) cancels two terms of size e^{2 q_1};
+  /// for a tangent v it equals m R v_t / sinh q_1 (<x,v> = 0 gives u.v_s = coth q_1 v_t),
+  /// which has no cancellation, so that form is used where sinh q_1 > 1.
   void momentum(const Point& q, const Ambient& v, Scalar m, Point& p) const {
     Ambient eta_v = v;
     eta_v[dim_] = -v[dim_];
     pullback(q, eta_v, p);
     p *= m;
+    using std::abs;
+    using std::sinh;
+    const Scalar s = sinh(q[0]);
+    if (abs(s) > Scalar(1)) p[0] = m * radius_ * v[dim_] / s;
   }
 
   // ---- re-charting (recharting.hpp, docs/charts.md) ----
@@ -325,6 +332,27 @@ class Hyperbolic {
   /// world point far out can resolve at all).
   template <class Frame>
   void to_frame(const Frame& c_frame, const Ambient& c, Ambient& out) const {
+    to_frame(c_frame, c, static_cast<const Ambient*>(nullptr), out, nullptr);
+  }
+
+  /// The same for a point x with a tangent velocity v there: out_x = C^{-1} x and
+  /// out_v = C^{-1} v, the latter as the time derivative of the half-angle form above along
+  /// x(t) = R (sinh rho w, cosh rho), read from v as rho' = v_t / (R sinh rho) and the
+  /// transverse velocity S = sinh rho w' = (v_s - (v_s.w) w) / R (an O(1) vector):
+  ///   b' = (S - (S.u) u) + w_perp cosh rho rho' + a' u,
+  ///   a' = cosh(rho - r) rho' - cosh r (cosh rho rho' |w - u|^2 / 2 + (w - u).S),
+  /// so the error is eps sinh d(o, x) again, where C^{-1} v as a matrix product would lose
+  /// eps e^{2D}. For the bodies of a scene given far out in world coordinates
+  /// (sesi::enter_cluster_frame). Near the world origin (sinh rho < 1) or with the frame there
+  /// (sinh r < 1) the product loses no more than that and is used.
+  template <class Frame>
+  void to_frame(const Frame& c_frame, const Ambient& x, const Ambient& v, Ambient& out_x, Ambient& out_v) const {
+    to_frame(c_frame, x, &v, out_x, &out_v);
+  }
+
+ private:
+  template <class Frame>
+  void to_frame(const Frame& c_frame, const Ambient& c, const Ambient* v, Ambient& out, Ambient* out_v) const {
     using std::asinh;
     using std::cosh;
     using std::sinh;
@@ -338,6 +366,19 @@ class Hyperbolic {
     const Scalar pt = c_frame(n, n);
     const auto cs = (c.head(n) / radius_).eval();
     const Scalar sr = ps.norm(), srho = cs.norm();
+    if (v && (sr < Scalar(1) || srho < Scalar(1))) {
+      // Near the world origin: C^{-1} = eta C^T eta, and the products lose eps e^{r + rho},
+      // which is no more than the bound (one of the two is O(1)).
+      Ambient y = c, u = *v;
+      y[n] = -y[n];
+      u[n] = -u[n];
+      out.noalias() = c_frame.transpose() * y;
+      out_v->resize(n + 1);
+      out_v->noalias() = c_frame.transpose() * u;
+      (*out_v)[n] = -(*out_v)[n];
+      out[n] = -out[n];
+      return;
+    }
     const Scalar r = asinh(sr), rho = asinh(srho);
     Eigen::Matrix<Scalar, N, 1> u = Eigen::Matrix<Scalar, N, 1>::Zero(n), w(n);
     if (sr > Scalar(0)) u = ps / sr;
@@ -346,17 +387,25 @@ class Hyperbolic {
     } else {
       w = u;  // c at the world origin: any direction, sinh rho = 0
     }
-    Eigen::Matrix<Scalar, N, 1> b(n);
+    Eigen::Matrix<Scalar, N, 1> b(n), db = Eigen::Matrix<Scalar, N, 1>::Zero(n);
+    Scalar half(0);
+    Eigen::Matrix<Scalar, N, 1> dw = w - u;
     if (sr > Scalar(0)) {
-      const Eigen::Matrix<Scalar, N, 1> dw = w - u;
-      const Scalar half = dw.squaredNorm() / Scalar(2);  // 2 sin^2(theta/2) = 1 - cos theta
+      half = dw.squaredNorm() / Scalar(2);  // 2 sin^2(theta/2) = 1 - cos theta
       const Scalar a = sinh(rho - r) - cosh(r) * srho * half;
       b = (dw - dw.dot(u) * u) * srho + a * u;
     } else {
       b = cs;  // the frame's origin is the world origin: B(p) = I
     }
+    if (v) {  // here sinh r, sinh rho >= 1
+      const Scalar rd = (*v)[n] / radius_ / srho;  // rho'
+      const auto vs = (v->head(n) / radius_).eval();
+      const Eigen::Matrix<Scalar, N, 1> S = vs - vs.dot(w) * w;  // sinh rho w'
+      const Scalar ad = cosh(rho - r) * rd - cosh(r) * (cosh(rho) * rd * half + dw.dot(S));
+      db = (S - S.dot(u) * u) + (dw - dw.dot(u) * u) * (cosh(rho) * rd) + ad * u;
+    }
     // Q^T b: Q's columns from C's spatial columns (tangent at p), O(1) after the subtraction.
-    Eigen::Matrix<Scalar, N, N> q(n, n);
+    Eigen::Matrix<Scalar, N, N> q = Eigen::Matrix<Scalar, N, N>::Zero(n, n);  // (zeroed: GCC 12 misreads H^1)
     for (int k = 0; k < n; ++k) {
       q.col(k) = c_frame.col(k).head(n) - ps * (c_frame(n, k) / (Scalar(1) + pt));
     }
@@ -364,10 +413,19 @@ class Hyperbolic {
     out.head(n) = radius_ * local;
     // On the hyperboloid by construction: the time part from the spatial one,
     // cosh(d) = sqrt(1 + sinh^2 d) (no cancellation).
-    out[n] = radius_ * sqrt(Scalar(1) + local.squaredNorm());
+    const Scalar t = sqrt(Scalar(1) + local.squaredNorm());
+    out[n] = radius_ * t;
     SESI_CHECK(abs_of(constraint(out)) <= invariant_tolerance() * out[n] * out[n],
                "to_frame: the point must be on the hyperboloid");
+    if (v) {
+      const Eigen::Matrix<Scalar, N, 1> dlocal = q.transpose() * db;
+      out_v->resize(n + 1);
+      out_v->head(n) = radius_ * dlocal;
+      (*out_v)[n] = radius_ * local.dot(dlocal) / t;  // tangent by construction: d/dt sqrt(1 + |l|^2)
+    }
   }
+
+ public:
 
   /// Constraint residual <x,x> + R^2 (zero on the space).
   Scalar constraint(const Ambient& x) const { return minkowski(x, x) + radius_ * radius_; }
@@ -411,6 +469,25 @@ class Hyperbolic {
     // Clamp round-off negatives only: a NaN chord stays NaN (a diverged state is not at distance 0).
     return Scalar(2) * radius_ * asinh(sqrt(chord2 < Scalar(0) ? Scalar(0) : chord2) /
                                        (Scalar(2) * radius_));
+  }
+  /// The same distance read by the points' radii rho and directions w (the hyperbolic law of
+  /// cosines in half-angle form, as to_frame): with h = |w_x - w_y|^2 / 2 = 1 - cos theta,
+  ///   sinh^2(d / 2R) = sinh^2((rho_x - rho_y) / 2) + sinh rho_x sinh rho_y h / 2,
+  /// so two points far out at an O(1) distance lose eps sinh rho (what their coordinates
+  /// resolve) where the chord of distance() loses eps e^{2 rho}. For checks of world points far
+  /// out (a scene's initial conditions); the pair loops see cluster-local points and use the chord.
+  Scalar polar_distance(const Ambient& x, const Ambient& y) const {
+    using std::asinh;
+    using std::sinh;
+    using std::sqrt;
+    const int n = dim_;
+    const auto xs = (x.head(n) / radius_).eval();
+    const auto ys = (y.head(n) / radius_).eval();
+    const Scalar sx = xs.norm(), sy = ys.norm();
+    Scalar h(0);
+    if (sx > Scalar(0) && sy > Scalar(0)) h = (xs / sx - ys / sy).squaredNorm() / Scalar(2);
+    const Scalar half = sinh((asinh(sx) - asinh(sy)) / Scalar(2));
+    return Scalar(2) * radius_ * asinh(sqrt(half * half + sx * sy * h / Scalar(2)));
   }
   /// Euclidean gradient of the distance in x: -eta (b + <a,b> a) / sinh(d/R), a = x/R, b = y/R.
   /// The added multiple of eta a is normal, so the pull-back is unchanged and the vector small.
