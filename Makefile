@@ -5,10 +5,11 @@ BUILD_DIR   ?= build
 RELEASE_DIR ?= build-release
 JOBS        ?= $(shell nproc)
 # clang and its runtimes (libclang-rt) build the sanitizer job of `make test` and `make fuzz`;
-# libbenchmark-dev the micro-benchmarks (`make microbench`, and a smoke test in `make test`).
+# libbenchmark-dev the micro-benchmarks (`make microbench`, and a smoke test in `make test`);
+# python3-dev, python3-numpy, pybind11-dev and python3-pytest the Python package and its tests.
 APT_PACKAGES := cmake g++ make libeigen3-dev libboost-dev doctest-dev libtomlplusplus-dev \
                 libcli11-dev python3-matplotlib clang libclang-rt-14-dev libbenchmark-dev \
-                libhdf5-dev python3-h5py
+                libhdf5-dev python3-h5py python3-dev python3-numpy pybind11-dev python3-pytest
 
 .PHONY: deps configure build test demo clean fuzz figures microbench
 
@@ -19,8 +20,12 @@ deps:
 	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing; \
 	fi
 
+# Debian's Python (its NumPy, pytest, matplotlib), whatever python3 comes first in PATH.
+PYTHON3 := $(shell test -x /usr/bin/python3 && echo /usr/bin/python3 || command -v python3)
+
 configure: deps
-	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSESI_WERROR=ON -DSESI_BUILD_BENCHMARKS=ON
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSESI_WERROR=ON -DSESI_BUILD_BENCHMARKS=ON \
+	  -DPython3_EXECUTABLE=$(PYTHON3)
 
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
@@ -63,7 +68,6 @@ fuzz: deps
 # scenes in a Release build, the seed's two figures, then the plots (Debian's matplotlib).
 BENCH_DIR ?= build-bench
 BENCH_OUT ?= sesi-out/bench
-PYTHON3   := $$(test -x /usr/bin/python3 && echo /usr/bin/python3 || echo python3)
 figures: deps
 	cmake -S . -B $(BENCH_DIR) -DCMAKE_BUILD_TYPE=Release -DSESI_BUILD_TESTS=OFF
 	cmake --build $(BENCH_DIR) -j $(JOBS) --target sesi_program
@@ -78,11 +82,11 @@ figures: deps
 	@# Many bodies (issue #11): time per step against N, with the flat references of the same run.
 	$(BENCH_DIR)/src/sesi bench --scaling --space sphere --dim 2 --threads 1,2 --out $(BENCH_OUT)/scaling-s2
 	$(BENCH_DIR)/src/sesi bench --scaling --space sphere --dim 3 --out $(BENCH_OUT)/scaling-s3
-	$(BENCH_DIR)/src/sesi bench --scaling --space hyperbolic --dim 2 --out $(BENCH_OUT)/scaling-h2
-	$(BENCH_DIR)/src/sesi bench --scaling --space hyperbolic --dim 2 --center-distance 10 --out $(BENCH_OUT)/scaling-h2-far
+	$(BENCH_DIR)/src/sesi bench --scaling --space hyperbolic --dim 2 --center-distance 0,10 --repeats 5 \
+	  --out $(BENCH_OUT)/scaling-h2
 	$(BENCH_DIR)/src/sesi bench --scaling --potential cotangent-gravity --methods sesi4 --n 1000,3000,10000 \
 	  --out $(BENCH_OUT)/scaling-gravity-s2
 	$(PYTHON3) tools/plot_scaling.py $(BENCH_OUT)/scaling-s2 --figure docs/figures/scaling-s2.png --markdown \
 	  | tee $(BENCH_OUT)/scaling-report.txt
-	$(PYTHON3) tools/plot_scaling.py $(BENCH_OUT)/scaling-s3 $(BENCH_OUT)/scaling-h2 $(BENCH_OUT)/scaling-h2-far \
+	$(PYTHON3) tools/plot_scaling.py $(BENCH_OUT)/scaling-s3 $(BENCH_OUT)/scaling-h2 \
 	  $(BENCH_OUT)/scaling-gravity-s2 --figure docs/figures/scaling-others.png --markdown | tee -a $(BENCH_OUT)/scaling-report.txt

@@ -100,7 +100,8 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
   b->add_option("--out,-o", o.out, "Output directory (default sesi-out/bench/<scene>).")
       ->type_name("DIR");
   b->add_flag("--quick", o.quick, "A short sweep (t_end <= 20, 200 samples, 2-3 points per method; for tests).");
-  b->add_option("--repeats", o.repeats, "Timed repeats per point (minimum reported).")
+  b->add_option("--repeats", o.repeats,
+                "Timed repeats per point (minimum reported; with --scaling, rounds over all the points, default 1).")
       ->type_name("N");
   b->add_option("--form", o.form,
                 "Form of the sesi* rows: program (kick-drift-kick, as sesi run; re-charting on a "
@@ -127,9 +128,10 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
       ->type_name("N");
   b->add_option("--skin", o.skin, "--scaling: the runs' neighbour_skin (default 0.12; 0: lists rebuilt every step).")
       ->type_name("S");
-  b->add_option("--center-distance", o.center_distance,
-                "--scaling on H^n: the cluster's centre this many radii from the chart origin (default 0).")
-      ->type_name("D");
+  b->add_option("--center-distance", o.center_distances,
+                "--scaling on H^n: comma-separated distances of the cluster's centre from the chart origin, in "
+                "radii (default 0); one row per distance, the far / origin ratios printed.")
+      ->type_name("LIST");
   std::string footer = "\nMETHODS:";
   for (const bench::MethodSpec& m : bench::all_methods()) footer += " " + std::string(m.name);
   footer +=

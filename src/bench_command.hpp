@@ -31,7 +31,7 @@ struct BenchOptions {
   std::string sizes;                       ///< comma-separated body counts (empty: the default)
   std::string threads;                     ///< comma-separated thread counts (empty: all cores)
   long steps = 0;                          ///< timed steps per point (0: the default)
-  double center_distance = 0;              ///< H^n: the cluster's centre, in radii from the origin
+  std::string center_distances;            ///< H^n: comma-separated centre distances in radii (empty: 0)
   long check_every = 0;                    ///< the runs' check cadence (0: sesi run's default)
   double skin = sesi::default_skin_fraction;  ///< the runs' neighbour_skin
 };

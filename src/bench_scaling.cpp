@@ -44,7 +44,8 @@ struct Row {
   int dim;
   std::string potential, method;
   Measured m;
-  int stages;  ///< force evaluations per step
+  int stages;                   ///< force evaluations per step
+  double center_distance = 0;   ///< H^n: the cluster's centre, radii from the chart origin
 };
 
 std::vector<long> parse_list(const std::string& text, const char* option, long least, long most) {
@@ -66,6 +67,27 @@ std::vector<long> parse_list(const std::string& text, const char* option, long l
     out.push_back(value);
   }
   if (out.empty()) throw InputError(std::string(option) + ": empty list");
+  return out;
+}
+
+std::vector<double> parse_distances(const std::string& text) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    double value = -1;
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(value) || value < 0 || value > 30) {
+      throw InputError("--center-distance: '" + item + "' is not a distance from 0 to 30 radii");
+    }
+    out.push_back(value);
+  }
+  if (out.empty()) throw InputError("--center-distance: empty list");
   return out;
 }
 
@@ -170,22 +192,32 @@ std::string space_label(SpaceKind kind) { return std::string(space_name(kind)); 
 
 void write_row(std::FILE* csv, const Row& r) {
   const double pairs_per_step = static_cast<double>(r.m.pairs) * r.stages;
-  std::fprintf(csv, "%d,%s,%d,%s,%s,%d,%.6g,%.6g,%.4g,%.1f\n", r.bodies, r.space.c_str(), r.dim, r.potential.c_str(),
-               r.method.c_str(), r.m.threads, r.m.seconds_per_step, pairs_per_step,
-               pairs_per_step > 0 ? r.m.seconds_per_step / pairs_per_step * 1e9 : 0.0, r.m.peak_rss_mb);
+  std::fprintf(csv, "%d,%s,%d,%s,%s,%d,%.6g,%.6g,%.4g,%.1f,%g\n", r.bodies, r.space.c_str(), r.dim,
+               r.potential.c_str(), r.method.c_str(), r.m.threads, r.m.seconds_per_step, pairs_per_step,
+               pairs_per_step > 0 ? r.m.seconds_per_step / pairs_per_step * 1e9 : 0.0, r.m.peak_rss_mb,
+               r.center_distance);
   std::fflush(csv);
-  std::printf("  %7d bodies  %-10s %d  %-17s %-15s %d thr  %10.4g s/step  %8.1f ns/pair  %7.1f MB\n", r.bodies,
+  std::printf("  %7d bodies  %-10s %d  %-17s %-15s %d thr  %10.4g s/step  %8.1f ns/pair  %7.1f MB", r.bodies,
               r.space.c_str(), r.dim, r.potential.c_str(), r.method.c_str(), r.m.threads, r.m.seconds_per_step,
               pairs_per_step > 0 ? r.m.seconds_per_step / pairs_per_step * 1e9 : 0.0, r.m.peak_rss_mb);
+  if (r.center_distance != 0) std::printf("  centre %g R away", r.center_distance);
+  std::printf("\n");
   std::fflush(stdout);
+}
+
+std::string format_distance(double d) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", d);
+  return text;
 }
 
 /// Exponents of time per step against N along each series, and the ratios to the references.
 void print_summary(const std::vector<Row>& rows) {
   std::map<std::string, std::vector<const Row*>> series;
   for (const Row& r : rows) {
-    series[r.space + " " + std::to_string(r.dim) + " " + r.method + " " + std::to_string(r.m.threads) + " threads"]
-        .push_back(&r);
+    std::string name = r.space + " " + std::to_string(r.dim) + " " + r.method + " " + std::to_string(r.m.threads) + " threads";
+    if (r.center_distance != 0) name += " centre " + format_distance(r.center_distance) + " R";
+    series[name].push_back(&r);
   }
   std::printf("\nexponent of seconds per step against N (log-log slope):\n");
   for (const auto& [name, s] : series) {
@@ -211,6 +243,10 @@ void print_summary(const std::vector<Row>& rows) {
       } else if (q.space == "euclidean" && q.dim == 3 && q.method == r.method && q.m.threads == r.m.threads &&
                  !(r.space == "euclidean" && r.dim == 3)) {
         std::printf("  / sesi E^3 %.2f", r.m.seconds_per_step / q.m.seconds_per_step);
+      } else if (r.center_distance != 0 && q.space == r.space && q.dim == r.dim && q.method == r.method &&
+                 q.m.threads == r.m.threads && q.center_distance == 0) {
+        std::printf("  far (%s R) / origin %.2f", format_distance(r.center_distance).c_str(),
+                    r.m.seconds_per_step / q.m.seconds_per_step);
       }
     }
     std::printf("\n");
@@ -236,13 +272,12 @@ int scaling_command(const BenchOptions& o) {
     throw InputError("--potential: lennard-jones or cotangent-gravity, not '" + o.potential + "'");
   }
   base.potential = o.potential;
-  if (!std::isfinite(o.center_distance) || o.center_distance < 0 || o.center_distance > 30) {
-    throw InputError("--center-distance: from 0 to 30 radii");
-  }
-  if (o.center_distance != 0 && base.space != SpaceKind::hyperbolic) {
+  const std::vector<double> distances = parse_distances(o.center_distances.empty() ? "0" : o.center_distances);
+  if (base.space != SpaceKind::hyperbolic && (distances.size() != 1 || distances[0] != 0)) {
     throw InputError("--center-distance: only on --space hyperbolic");
   }
-  base.center_distance = o.center_distance;
+  if (o.repeats < 0 || o.repeats > 100) throw InputError("--repeats: from 1 to 100");
+  const int rounds = o.repeats > 0 ? o.repeats : 1;
   if (o.check_every < 0) throw InputError("--check-every: must be >= 1 (or 0, the default cadence)");
   if (!(o.skin >= 0 && o.skin <= 1)) throw InputError("--skin: a number from 0 to 1");
   const std::vector<long> sizes = parse_list(o.sizes.empty() ? default_sizes : o.sizes, "--n", 2, 10'000'000);
@@ -264,7 +299,10 @@ int scaling_command(const BenchOptions& o) {
                "flat-periodic: a plain 3-D LJ cell-list loop, velocity Verlet, one thread\n",
                warm + 1, warm);
   std::fprintf(csv, "# pairs_per_step: pairs within the cutoff (all pairs for gravity) x force evaluations per step\n");
-  if (base.space == SpaceKind::hyperbolic) std::fprintf(csv, "# center_distance = %g radii\n", base.center_distance);
+  if (rounds > 1) {
+    std::fprintf(csv, "# seconds_per_step and peak_rss_mb: minimum over %d rounds, each round timing every point of an N "
+                 "once in turn\n", rounds);
+  }
   if (o.check_every > 0) std::fprintf(csv, "# check_every = %ld (not sesi run's default)\n", o.check_every);
   if (o.skin != sesi::default_skin_fraction) std::fprintf(csv, "# neighbour_skin = %g (not sesi run's default)\n", o.skin);
 #ifdef NDEBUG
@@ -272,7 +310,8 @@ int scaling_command(const BenchOptions& o) {
 #else
   std::fprintf(csv, "# build: NOT optimised (no NDEBUG): timings are not representative\n");
 #endif
-  std::fprintf(csv, "n_bodies,space,dim,potential,method,threads,seconds_per_step,pairs_per_step,ns_per_pair,peak_rss_mb\n");
+  std::fprintf(csv, "n_bodies,space,dim,potential,method,threads,seconds_per_step,pairs_per_step,ns_per_pair,peak_rss_mb,"
+                    "center_distance\n");
 
   std::printf("sesi bench --scaling: %s, dim %d, %s\n", o.space.c_str(), base.dim, base.potential.c_str());
   std::vector<Row> rows;
@@ -282,6 +321,14 @@ int scaling_command(const BenchOptions& o) {
     // ~ N^2 (gravity), about 1 s for 2 10^6 / N steps of Lennard-Jones and 2 10^8 / N^2 of gravity.
     const double scale = lj ? 2e6 / static_cast<double>(n) : 2e8 / (static_cast<double>(n) * static_cast<double>(n));
     const long steps = o.steps > 0 ? o.steps : std::max(lj ? 40L : 4L, std::min(20000L, std::lround(scale)));
+    // The points of this N, in the order they are timed; every round times each once, so that a
+    // slow spell of the machine falls on all of them, and a row keeps its fastest round.
+    struct Point {
+      Row row;             ///< what is written; its time the fastest round's
+      ScalingPoint scene;  ///< unused for the flat cell-list loop
+      int threads;         ///< asked for (0: all cores)
+    };
+    std::vector<Point> points;
     for (const std::string& method : methods) {
       const int stages = find_method_info(method)->stages;
       for (const long t : threads) {
@@ -290,28 +337,44 @@ int scaling_command(const BenchOptions& o) {
         point.check_every = o.check_every;
         point.neighbour_skin = o.skin;
         point.method = method;
-        rows.push_back({point.bodies, space_label(point.space), point.dim, point.potential, method,
-                        measure_sesi(point, static_cast<int>(t), warm, steps), stages});
-        write_row(csv, rows.back());
+        for (const double d : distances) {
+          point.center_distance = d;
+          points.push_back({{point.bodies, space_label(point.space), point.dim, point.potential, method,
+                             Measured{}, stages, d},
+                            point, static_cast<int>(t)});
+        }
         if (!flat3) {  // the same bodies' count and density on flat E^3, through sesi
           ScalingPoint flat = point;
           flat.space = SpaceKind::euclidean;
           flat.dim = 3;
           flat.center_distance = 0;
-          rows.push_back({flat.bodies, "euclidean", 3, flat.potential, method,
-                          measure_sesi(flat, static_cast<int>(t), warm, steps), stages});
-          write_row(csv, rows.back());
+          points.push_back({{flat.bodies, "euclidean", 3, flat.potential, method,
+                             Measured{}, stages, 0},
+                            flat, static_cast<int>(t)});
         }
       }
     }
     if (lj) {
-      const Measured m = in_child([&] {
-        Measured out;
-        out.threads = 1;
-        out.seconds_per_step = flat_cell_list_seconds_per_step(static_cast<int>(n), steps, out.pairs);
-        return out;
-      });
-      rows.push_back({static_cast<int>(n), "flat-periodic", 3, "lennard-jones", "velocity-verlet", m, 1});
+      points.push_back({{static_cast<int>(n), "flat-periodic", 3, "lennard-jones", "velocity-verlet",
+                         Measured{}, 1, 0},
+                        ScalingPoint{}, 1});
+    }
+    for (int round = 0; round < rounds; ++round) {
+      for (Point& p : points) {
+        const Measured m = p.row.space == "flat-periodic" ? in_child([&] {
+          Measured out;
+          out.threads = 1;
+          out.seconds_per_step = flat_cell_list_seconds_per_step(static_cast<int>(n), steps, out.pairs);
+          return out;
+        })
+                                                           : measure_sesi(p.scene, p.threads, warm, steps);
+        const double peak = round == 0 ? m.peak_rss_mb : std::min(p.row.m.peak_rss_mb, m.peak_rss_mb);
+        if (round == 0 || m.seconds_per_step < p.row.m.seconds_per_step) p.row.m = m;
+        p.row.m.peak_rss_mb = peak;
+      }
+    }
+    for (const Point& p : points) {
+      rows.push_back(p.row);
       write_row(csv, rows.back());
     }
   }

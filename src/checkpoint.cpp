@@ -173,9 +173,12 @@ void write_potential(Out& out, const PotentialSpec& spec) {
           out.num(s.k).num(s.min_distance).vector(s.center);
         } else if constexpr (std::is_same_v<T, HarmonicPairSpec>) {
           out.num(s.k).num(s.d0);
-        } else {
-          static_assert(std::is_same_v<T, LennardJonesSpec>);
+        } else if constexpr (std::is_same_v<T, LennardJonesSpec>) {
           out.num(s.epsilon).num(s.sigma).num(s.cutoff).num(s.min_distance);
+        } else {
+          static_assert(std::is_same_v<T, FunctionExternalSpec>);
+          // Code cannot be saved: scenes with a function potential (Python) take no checkpoints.
+          throw std::logic_error("a scene with a function potential cannot be checkpointed");
         }
       },
       spec);

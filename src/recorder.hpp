@@ -20,6 +20,7 @@
 
 #include "checkpoint.hpp"
 #include "csv_writer.hpp"
+#include "run_sink.hpp"
 #include "run_types.hpp"
 #include "scene.hpp"
 #include "summary.hpp"
@@ -33,7 +34,7 @@ class H5mdWriter;
 /// M1_2, M1_3, ... (1-based ambient indices a < b) of M = sum m (x v^T - v x^T).
 std::vector<std::string> momentum_names(int ambient_dim, bool translations);
 
-class Recorder {
+class Recorder final : public RunSink {
  public:
   /// Opens the output files in dir and writes their headers.
   /// @param momentum_names names of the momentum-map components (sesi::momentum_map's order)
@@ -46,18 +47,18 @@ class Recorder {
   ~Recorder();
 
   /// Every checked step, from the initial state on: conserved quantities for the summary's maxima.
-  void track(double energy, const Eigen::VectorXd& momentum);
+  void track(double energy, const Eigen::VectorXd& momentum) override;
   /// One output row (trajectory, diagnostics, exact).
-  void write_row(const Snapshot& s);
+  void write_row(const Snapshot& s) override;
   /// The last finite state of the run, with velocities (for the summary's final state).
-  void set_final(Snapshot last);
+  void set_final(Snapshot last) override;
   /// Closes the trajectory and CSV files and writes summary.json.
   void finish(const RunOutcome& outcome, double wall_seconds);
 
   const InvariantStats& invariants() const { return stats_; }
   /// For a checkpoint: the statistics so far, and the outputs' lengths (flushed to the files).
-  RecorderState state() const;
-  OutputCursor cursor();
+  RecorderState state() const override;
+  OutputCursor cursor() override;
   /// Per body, the largest distance from the exact solution (empty without one).
   std::vector<double> max_exact_error() const;
 

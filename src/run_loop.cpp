@@ -91,60 +91,130 @@ sesi::EnergyGuard<double> energy_guard(const Scene& scene, const Geometry& geome
   return sesi::EnergyGuard<double>(s.energy, kinetic + std::abs(s.energy - kinetic), threshold);
 }
 
-/// The step sizes: |dt| everywhere but the last step, which ends exactly at t_end.
+/// The step sizes: |dt| everywhere but the last step, which ends exactly at t_end. Times are
+/// k dt, or t0 + (k - k0) dt for a run that goes on from a time t0 off that grid (RunStart).
 struct Schedule {
   long steps;
   double dt, last_h, sign, t_end;
+  long k0 = 0;
+  double t0 = 0.0;
+  bool on_grid = true;
   Schedule(double dt_, double t_end_)
       : steps(step_count(t_end_, dt_)), dt(dt_), last_h(dt_), sign(dt_ > 0 ? 1.0 : -1.0), t_end(t_end_) {
-    const double covered = static_cast<double>(steps) * std::abs(dt);
-    if (std::abs(covered - t_end) > 1e-9 * std::max(1.0, t_end)) {
-      last_h = sign * (t_end - static_cast<double>(steps - 1) * std::abs(dt));
+    shorten_last(static_cast<double>(steps) * std::abs(dt), t_end, steps);
+  }
+  /// From step k0 at time t0 (signed) to the signed time sign * t_end.
+  Schedule(double dt_, double t_end_, long k0_, double t0_)
+      : steps(0), dt(dt_), last_h(dt_), sign(dt_ > 0 ? 1.0 : -1.0), t_end(t_end_), k0(k0_), t0(t0_),
+        on_grid(t0_ == static_cast<double>(k0_) * dt_) {
+    if (on_grid) {
+      steps = step_count(t_end, dt);
+      shorten_last(static_cast<double>(steps) * std::abs(dt), t_end, steps);
+    } else {
+      const double left = t_end - sign * t0;  // >= 0, checked by the caller
+      steps = k0 + step_count(left, dt);
+      shorten_last(static_cast<double>(steps - k0) * std::abs(dt), left, steps - k0);
     }
   }
   double h(long k) const { return k == steps ? last_h : dt; }
   /// Time at the end of step k (0 for k = 0).
-  double time(long k) const { return k == steps ? sign * t_end : static_cast<double>(k) * dt; }
+  double time(long k) const {
+    if (k == steps) return sign * t_end;
+    return on_grid ? static_cast<double>(k) * dt : t0 + static_cast<double>(k - k0) * dt;
+  }
+
+ private:
+  void shorten_last(double covered, double length, long count) {
+    if (std::abs(covered - length) > 1e-9 * std::max(1.0, length)) {
+      last_h = sign * (length - static_cast<double>(count - 1) * std::abs(dt));
+    }
+  }
 };
 
-}  // namespace
 
-long default_check_every(int bodies) { return bodies < many_bodies ? 1 : 20; }
-
-RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& recorder, const RunControl& control,
-                    const Checkpoint* from) {
-  const Schedule schedule(*scene.integrator.dt, *scene.integrator.t_end);
-  const long every = scene.integrator.output_every;
-  const long check_every =
-      scene.integrator.check_every > 0 ? scene.integrator.check_every : default_check_every(scene.body_count());
-  const long checkpoint_every = control.checkpoint ? scene.integrator.checkpoint_every : 0;
-  const long first = from ? from->step : 0;
-
-  Snapshot s;
-  s.step = first;
-  s.t = schedule.time(first);
-  integrator.read(s.q, s.p);
-  s.energy = integrator.energy();
-  if (!std::isfinite(s.energy)) {
+/// The initial energy of the integrator's state; throws InputError when it is not finite.
+double initial_energy(const Scene& scene, Integrator& integrator) {
+  const double energy = integrator.energy();
+  if (!std::isfinite(energy)) {
     throw InputError(Origin{scene.source}, "",
                      "the initial energy is not finite (body " +
                          std::to_string(integrator.body_with_non_finite_energy()) +
                          "): check the initial conditions against the potentials");
   }
+  return energy;
+}
+
+double guard_threshold(const Scene& scene) {
+  return scene.integrator.energy_guard.value_or(sesi::EnergyGuard<double>::default_relative);
+}
+
+/// The loop of every run: from step `first` of schedule, with the guard's reference given
+/// (a checkpoint's, a RunStart's) or taken from the first state (fresh: that state is also
+/// tracked and written). first_written: the first state is a row of the outputs already.
+RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& recorder, const RunControl& control,
+                     const Schedule& schedule, long first, const RunStart* reference, bool fresh,
+                     bool first_written);
+
+}  // namespace
+
+long default_check_every(int bodies) { return bodies < many_bodies ? 1 : 20; }
+
+RunStart guard_reference(const Scene& scene, Integrator& integrator) {
+  Snapshot s;
+  integrator.read(s.q, s.p);
+  s.energy = initial_energy(scene, integrator);
+  const sesi::EnergyGuard<double> guard = energy_guard(scene, Geometry(scene.space), s);
+  RunStart start;
+  start.guard_energy = guard.initial_energy();
+  start.guard_scale = guard.scale();
+  return start;
+}
+
+RunOutcome run_loop(const Scene& scene, Integrator& integrator, RunSink& recorder, const RunControl& control,
+                    const Checkpoint* from) {
+  const Schedule schedule(*scene.integrator.dt, *scene.integrator.t_end);
+  if (!from) return run_steps(scene, integrator, recorder, control, schedule, 0, nullptr, true, true);
+  RunStart reference;
+  reference.guard_energy = from->guard_energy;
+  reference.guard_scale = from->guard_scale;
+  // A resumed run's rows and statistics up to its checkpoint are in the recorder already.
+  return run_steps(scene, integrator, recorder, control, schedule, from->step, &reference, false,
+                   from->step % scene.integrator.output_every == 0);
+}
+
+RunOutcome run_loop(const Scene& scene, Integrator& integrator, RunSink& sink, const RunControl& control,
+                    const RunStart& start) {
+  const Schedule schedule(*scene.integrator.dt, *scene.integrator.t_end, start.step, start.t);
+  return run_steps(scene, integrator, sink, control, schedule, start.step, &start, false, true);
+}
+
+namespace {
+
+RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& recorder, const RunControl& control,
+                     const Schedule& schedule, long first, const RunStart* reference, bool fresh,
+                     bool first_written) {
+  const long every = scene.integrator.output_every;
+  const long check_every =
+      scene.integrator.check_every > 0 ? scene.integrator.check_every : default_check_every(scene.body_count());
+  const long checkpoint_every = control.checkpoint ? scene.integrator.checkpoint_every : 0;
+
+  Snapshot s;
+  s.step = first;
+  s.t = schedule.time(first);
+  integrator.read(s.q, s.p);
+  s.energy = initial_energy(scene, integrator);
   s.momentum = integrator.momentum_map();
   s.x = integrator.points();
   s.v = integrator.velocities();
-  // A resumed run's rows and statistics up to its checkpoint are in the recorder already.
-  if (!from) {
+  if (fresh) {
     recorder.track(s.energy, s.momentum);
     recorder.write_row(s);
   }
 
   const Geometry geometry(scene.space);
   const sesi::EnergyGuard<double> guard =
-      from ? sesi::EnergyGuard<double>(from->guard_energy, from->guard_scale,
-                                       scene.integrator.energy_guard.value_or(sesi::EnergyGuard<double>::default_relative))
-           : energy_guard(scene, geometry, s);
+      reference ? sesi::EnergyGuard<double>(reference->guard_energy, reference->guard_scale, guard_threshold(scene))
+                : energy_guard(scene, geometry, s);
   const EncounterCheck encounters(scene, geometry);
   // The checkpoint of the state after step k, with the outputs as the recorder has them now.
   const auto take_checkpoint = [&](long k) {
@@ -167,7 +237,7 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& record
   // every checkpoint and at the last step; finiteness after every step. A failure names the step
   // where it was found and this last step known good, and no row is written past it.
   Snapshot good = s;
-  bool good_written = first % every == 0;
+  bool good_written = first_written;
   for (long k = first + 1; k <= schedule.steps; ++k) {
     if (control.interrupted && control.interrupted->load(std::memory_order_relaxed)) {
       outcome.reason = StopReason::interrupted;
@@ -253,5 +323,7 @@ RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& record
   recorder.set_final(std::move(good));
   return outcome;
 }
+
+}  // namespace
 
 }  // namespace sesi::program

@@ -7,7 +7,7 @@
 /// recorder.
 
 #include "integrator.hpp"
-#include "recorder.hpp"
+#include "run_sink.hpp"
 #include "run_types.hpp"
 #include "scene.hpp"
 
@@ -25,7 +25,25 @@ long default_check_every(int bodies);
 /// integrator already holds and whose outputs the recorder goes on with): the run then goes on
 /// exactly as if it had not stopped. Throws InputError (before any step) when the initial
 /// energy is not finite.
-RunOutcome run_loop(const Scene& scene, Integrator& integrator, Recorder& recorder, const RunControl& control,
+RunOutcome run_loop(const Scene& scene, Integrator& integrator, RunSink& recorder, const RunControl& control,
                     const Checkpoint* from = nullptr);
+
+/// A run that goes on from any state the integrator holds (the Python package's
+/// Simulation.integrate): after `step` steps at time t, with the energy guard's reference. The
+/// steps go on from there on the grid t + k dt (k dt when t is step dt, so that a run cut into
+/// pieces on the grid takes the steps of one run) up to the scene's t_end (whose sign is dt's),
+/// the last shortened to end there. Its first state is neither tracked nor written: the sink
+/// has it from the run before.
+struct RunStart {
+  long step = 0;
+  double t = 0.0;
+  double guard_energy = 0.0, guard_scale = 0.0;
+};
+RunOutcome run_loop(const Scene& scene, Integrator& integrator, RunSink& sink, const RunControl& control,
+                    const RunStart& start);
+
+/// The energy guard's reference (E0 and K0 + |V0|, sesi::EnergyGuard) at the integrator's
+/// state, as run_loop takes it at the start of a run. Throws InputError when E0 is not finite.
+RunStart guard_reference(const Scene& scene, Integrator& integrator);
 
 }  // namespace sesi::program

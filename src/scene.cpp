@@ -18,6 +18,7 @@ std::string_view potential_kind(const PotentialSpec& spec) {
     std::string_view operator()(const CentralCotangentSpec&) const { return "central-cotangent"; }
     std::string_view operator()(const HarmonicPairSpec&) const { return "harmonic-pair"; }
     std::string_view operator()(const LennardJonesSpec&) const { return "lennard-jones"; }
+    std::string_view operator()(const FunctionExternalSpec&) const { return "function"; }
   };
   return std::visit(Kind{}, spec);
 }

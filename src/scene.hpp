@@ -3,6 +3,7 @@
 /// A scene at run time: what a scene file (docs/scene-format.md) or the embedded default holds,
 /// validated and with every body's initial condition in chart coordinates (q, p).
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -58,8 +59,22 @@ struct LennardJonesSpec {
   double cutoff;
   double min_distance = -1.0;
 };
+/// An external potential given as code (the Python package's `add_potential(value=f,
+/// gradient=g)`, issue #13): V(x, m) on a body's world embedding point x and mass m, and dV/dx.
+/// Never read from a scene file; a scene holding one runs on one thread and takes no checkpoints.
+struct FunctionExternalSpec {
+  class Functions {
+   public:
+    virtual ~Functions() = default;
+    virtual double value(const Eigen::VectorXd& x, double m) const = 0;
+    /// g = dV/dx at x (g has x's size on entry).
+    virtual void gradient(const Eigen::VectorXd& x, double m, Eigen::VectorXd& g) const = 0;
+  };
+  /// Shared, so that copies of the scene and of the system's terms copy no callable.
+  std::shared_ptr<const Functions> functions;
+};
 using PotentialSpec = std::variant<ChordWellSpec, CotangentGravitySpec, CentralCotangentSpec,
-                                   HarmonicPairSpec, LennardJonesSpec>;
+                                   HarmonicPairSpec, LennardJonesSpec, FunctionExternalSpec>;
 
 /// The `kind` string of a potential.
 std::string_view potential_kind(const PotentialSpec& spec);

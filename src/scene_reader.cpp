@@ -1,4 +1,5 @@
 #include "scene_reader.hpp"
+#include "scene_table.hpp"
 
 #include <algorithm>
 #include <array>
@@ -34,6 +35,12 @@ constexpr double on_space_tolerance = 1e-9;
 constexpr double same_point_tolerance = 1e-12;
 
 constexpr std::array space_kinds = {"sphere"sv, "hyperbolic"sv, "euclidean"sv};
+// The keys of each potential kind (docs/scene-format.md; potential_catalogue()).
+constexpr std::array chord_well_keys = {"kind"sv, "theta0"sv, "strength"sv};
+constexpr std::array cotangent_gravity_keys = {"kind"sv, "G"sv, "min_distance"sv};
+constexpr std::array central_cotangent_keys = {"kind"sv, "k"sv, "center"sv, "min_distance"sv};
+constexpr std::array harmonic_pair_keys = {"kind"sv, "k"sv, "d0"sv};
+constexpr std::array lennard_jones_keys = {"kind"sv, "epsilon"sv, "sigma"sv, "cutoff"sv, "min_distance"sv};
 constexpr std::array potential_kinds = {"chord-well"sv, "cotangent-gravity"sv,
                                         "central-cotangent"sv, "harmonic-pair"sv,
                                         "lennard-jones"sv};
@@ -506,8 +513,7 @@ class SceneReader {
     }
     const std::string kind = term.string("kind", "a string");
     if (kind == "chord-well") {
-      static constexpr std::array keys = {"kind"sv, "theta0"sv, "strength"sv};
-      term.allow_only(keys, "a chord-well potential");
+      term.allow_only(chord_well_keys, "a chord-well potential");
       ChordWellSpec spec{term.number("theta0", "a finite angle in [0, pi]"),
                          term.number_or("strength", 2.0, "a finite number")};
       if (spec.theta0 < 0.0 || spec.theta0 > std::numbers::pi) {
@@ -516,13 +522,11 @@ class SceneReader {
       return spec;
     }
     if (kind == "cotangent-gravity") {
-      static constexpr std::array keys = {"kind"sv, "G"sv, "min_distance"sv};
-      term.allow_only(keys, "a cotangent-gravity potential");
+      term.allow_only(cotangent_gravity_keys, "a cotangent-gravity potential");
       return CotangentGravitySpec{term.number_or("G", 1.0, "a finite number"), min_distance(term)};
     }
     if (kind == "central-cotangent") {
-      static constexpr std::array keys = {"kind"sv, "k"sv, "center"sv, "min_distance"sv};
-      term.allow_only(keys, "a central-cotangent potential");
+      term.allow_only(central_cotangent_keys, "a central-cotangent potential");
       CentralCotangentSpec spec{term.number_or("k", 1.0, "a finite number"),
                                 term.vector("center", geometry_->ambient_dim(), "a point of the space"),
                                 min_distance(term)};
@@ -534,16 +538,14 @@ class SceneReader {
       return spec;
     }
     if (kind == "harmonic-pair") {
-      static constexpr std::array keys = {"kind"sv, "k"sv, "d0"sv};
-      term.allow_only(keys, "a harmonic-pair potential");
+      term.allow_only(harmonic_pair_keys, "a harmonic-pair potential");
       HarmonicPairSpec spec{term.number_or("k", 1.0, "a finite number"),
                             term.number_or("d0", 0.0, "a finite distance >= 0")};
       if (spec.d0 < 0.0) term.fail("d0", "expected a finite distance >= 0, got " + format_number(spec.d0));
       return spec;
     }
     if (kind == "lennard-jones") {
-      static constexpr std::array keys = {"kind"sv, "epsilon"sv, "sigma"sv, "cutoff"sv, "min_distance"sv};
-      term.allow_only(keys, "a lennard-jones potential");
+      term.allow_only(lennard_jones_keys, "a lennard-jones potential");
       LennardJonesSpec spec{term.number_or("epsilon", 1.0, "a finite number >= 0"),
                             term.number_or("sigma", 1.0, "a finite number > 0"), 0.0, min_distance(term)};
       spec.cutoff = term.number_or("cutoff", 2.5 * spec.sigma, "a finite distance > 0");
@@ -745,6 +747,28 @@ class SceneReader {
 };
 
 }  // namespace
+
+std::span<const PotentialInfo> potential_catalogue() {
+  // The defaults and energies as docs/scene-format.md states them.
+  static const std::array<PotentialInfo, 5> catalogue = {{
+      {"chord-well", chord_well_keys, "theta0 (required, in [0, pi]), strength = 2",
+       "strength * sum over pairs i<j of the seed's well of the chord"},
+      {"cotangent-gravity", cotangent_gravity_keys, "G = 1, min_distance = R eps^(1/3)",
+       "-G sum_(i<j) m_i m_j ctn(d_ij)"},
+      {"central-cotangent", central_cotangent_keys,
+       "k = 1, center (required, an embedding point), min_distance = R eps^(1/3)",
+       "-k sum_i m_i ctn(d(x_i, center))"},
+      {"harmonic-pair", harmonic_pair_keys, "k = 1, d0 = 0", "sum_(i<j) k/2 (d_ij - d0)^2"},
+      {"lennard-jones", lennard_jones_keys,
+       "epsilon = 1, sigma = 1, cutoff = 2.5 sigma, min_distance = sigma eps^(1/3)",
+       "sum_(i<j) 4 epsilon ((sigma/d)^12 - (sigma/d)^6), shifted to 0 at the cutoff"},
+  }};
+  return catalogue;
+}
+
+Scene read_scene_table(const toml::table& root, const std::string& source) {
+  return SceneReader(root, source).read();
+}
 
 Scene read_scene_text(std::string_view text, const std::string& path) {
   // Size, key parts and nesting first: toml++ recurses once per level (scene_limits.hpp).

@@ -5,6 +5,7 @@
 /// chart's domain, no body where a pair potential is singular. Any failure throws InputError
 /// naming the file, the line, the key and what was expected.
 
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -17,5 +18,15 @@ Scene read_scene_file(const std::string& path);
 
 /// Read and check scene text; path names it in messages and gives the default name (its stem).
 Scene read_scene_text(std::string_view text, const std::string& path);
+
+/// A potential kind of the scene format, for listings (the Python package's sesi.potentials()).
+struct PotentialInfo {
+  std::string_view kind;
+  std::span<const std::string_view> keys;  ///< every key of its [[potential]] table, "kind" first
+  std::string_view defaults;               ///< the keys' defaults, in words
+  std::string_view energy;
+};
+/// Every potential kind a scene file may name, in the order of docs/scene-format.md.
+std::span<const PotentialInfo> potential_catalogue();
 
 }  // namespace sesi::program

@@ -11,6 +11,7 @@
 /// function per pair. The geodesic aggregate gets the geodesic distance d.
 
 #include <algorithm>
+#include <memory>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -118,18 +119,48 @@ class ShortPairTerms : public PairSum<sesi::geodesic_distance, sesi::LennardJone
   }
 };
 
+/// An external potential given as code (FunctionExternalSpec), on world points: in a cluster
+/// frame C (H^n) it sees the world point C x of a local x, and its gradient goes back as C^T g
+/// (the chain rule of V(C x)).
+template <class Chart>
+struct FunctionExternal {
+  using Ambient = typename Chart::Ambient;
+  std::shared_ptr<const FunctionExternalSpec::Functions> functions;
+  Eigen::MatrixXd frame;  ///< world = frame * local; empty: the identity
+
+  double value(const Chart&, const Ambient& x, double m) const {
+    return functions->value(world(x), m);
+  }
+  void gradient(const Chart&, const Ambient& x, double m, Ambient& g) const {
+    Eigen::VectorXd dv = Eigen::VectorXd::Zero(x.size());
+    functions->gradient(world(x), m, dv);
+    if (frame.size() == 0) {
+      g = dv;
+    } else {
+      g = frame.transpose() * dv;
+    }
+  }
+
+ private:
+  Eigen::VectorXd world(const Ambient& x) const {
+    if (frame.size() == 0) return x;
+    return frame * x;
+  }
+};
+
 /// All external terms of a scene: V(x) = sum of the terms' V.
 template <class Chart>
 class ExternalTerms {
  public:
   using Ambient = typename Chart::Ambient;
-  using Term = std::variant<sesi::CentralCotangent<Chart>>;
+  using Term = std::variant<sesi::CentralCotangent<Chart>, FunctionExternal<Chart>>;
 
   void add(Term term) { terms_.push_back(std::move(term)); }
   bool empty() const { return terms_.empty(); }
 
-  /// Every term has a force centre: in a cluster frame (H^n) the system evaluates the terms
-  /// with their centres moved into it (sesi::System::has_movable_center).
+  /// Every term depends on where the world is: in a cluster frame (H^n) the system evaluates
+  /// the terms as seen from it (sesi::System::has_movable_center): force centres moved into
+  /// the frame, function terms given the frame.
   bool has_centres() const { return !terms_.empty(); }
   template <class Frame>
     requires requires(const Chart& c, const Frame& f, Ambient& a) { c.to_frame(f, a, a); }
@@ -138,8 +169,12 @@ class ExternalTerms {
     for (Term& term : out.terms_) {
       std::visit(
           [&](auto& t) {
-            const Ambient world = t.center;
-            space.to_frame(frame, world, t.center);
+            if constexpr (std::is_same_v<std::remove_cvref_t<decltype(t)>, FunctionExternal<Chart>>) {
+              t.frame = frame;
+            } else {
+              const Ambient world = t.center;
+              space.to_frame(frame, world, t.center);
+            }
           },
           term);
     }
@@ -191,6 +226,8 @@ void add_terms(const Scene& scene, ChordPairTerms<Chart>& chords, PairTerms<Char
       term.k = s->k;
       term.center = s->center;
       externals.add(std::move(term));
+    } else if (const auto* s = std::get_if<FunctionExternalSpec>(&spec)) {
+      externals.add(FunctionExternal<Chart>{s->functions, {}});
     }
   }
 }

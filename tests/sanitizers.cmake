@@ -29,6 +29,7 @@ run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${dir} -G "Unix Makefiles"
     -D SESI_INSTALL=OFF
     -D SESI_BUILD_EXAMPLES=OFF
     -D SESI_BUILD_BENCHMARKS=OFF
+    -D SESI_BUILD_PYTHON=OFF
     -D SESI_TEST_PARTS=core,program,bench)
 run(${CMAKE_COMMAND} --build ${dir} -j ${JOBS})
 run(${CMAKE_CTEST_COMMAND} --test-dir ${dir} --output-on-failure -j ${JOBS} -LE long)

@@ -6,7 +6,8 @@
 Each DIR holds a scaling.csv. Plots seconds per step against N on log-log axes, one line per
 (space, dimension, potential, method, threads), with dashed O(N) and O(N^2) guides through the
 first point, and prints per series the log-log slopes and, at every N, the ratios to the
-references of the same run (sesi on flat E^3, and the plain flat cell-list loop).
+references of the same run (sesi on flat E^3, the plain flat cell-list loop, and for an H^n
+cluster away from the chart origin the same cluster at the origin).
 """
 import argparse
 import csv
@@ -29,6 +30,7 @@ def read(directory):
             r[key] = int(r[key])
         for key in ("seconds_per_step", "pairs_per_step", "ns_per_pair", "peak_rss_mb"):
             r[key] = float(r[key])
+        r["center_distance"] = float(r.get("center_distance") or 0)
         r["source"] = directory
     return rows
 
@@ -37,7 +39,8 @@ def label(r):
     if r["space"] == "flat-periodic":
         return "flat cell-list loop (3-D, 1 thread)" + r.get("tag", "")
     symbol = {"sphere": "S", "hyperbolic": "H", "euclidean": "E"}[r["space"]]
-    return f"{symbol}^{r['dim']} {r['potential']} {r['method']} {r['threads']} thr" + r.get("tag", "")
+    far = f" centre {r['center_distance']:g} R away" if r["center_distance"] else ""
+    return f"{symbol}^{r['dim']} {r['potential']} {r['method']} {r['threads']} thr{far}" + r.get("tag", "")
 
 
 def series_of(rows):
@@ -92,8 +95,8 @@ def main():
 
     print()
     if args.markdown:
-        print("| N | series | s/step | ns/pair | peak MB | / sesi E^3 | / flat cell list |")
-        print("|---|---|---|---|---|---|---|")
+        print("| N | series | s/step | ns/pair | peak MB | / sesi E^3 | / flat cell list | far / origin |")
+        print("|---|---|---|---|---|---|---|---|")
     for r in sorted(rows, key=lambda r: (r["source"], r["n_bodies"], label(r))):
         same = [q for q in rows if q["source"] == r["source"] and q["n_bodies"] == r["n_bodies"]]
         flat = [q for q in same if q["space"] == "flat-periodic"]
@@ -102,8 +105,11 @@ def main():
         ratio_e3 = f"{r['seconds_per_step'] / e3[0]['seconds_per_step']:.2f}" if e3 and r["space"] != "euclidean" else ""
         ratio_flat = (f"{r['seconds_per_step'] / flat[0]['seconds_per_step']:.2f}"
                       if flat and r["space"] != "flat-periodic" else "")
+        origin = [q for q in same if r["center_distance"] and q["space"] == r["space"] and q["dim"] == r["dim"]
+                  and q["method"] == r["method"] and q["threads"] == r["threads"] and not q["center_distance"]]
+        ratio_origin = f"{r['seconds_per_step'] / origin[0]['seconds_per_step']:.2f}" if origin else ""
         cells = [str(r["n_bodies"]), label(r), f"{r['seconds_per_step']:.4g}", f"{r['ns_per_pair']:.3g}",
-                 f"{r['peak_rss_mb']:.0f}", ratio_e3, ratio_flat]
+                 f"{r['peak_rss_mb']:.0f}", ratio_e3, ratio_flat, ratio_origin]
         print(("| " + " | ".join(cells) + " |") if args.markdown else "  " + "  ".join(cells))
 
 

@@ -313,8 +313,12 @@ class System {
       grad.resize(dim(), bodies());
       for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
         pull_back(s, w, b, sc);
-        grad.col(b) = sc.p;
-        s.p.col(b) -= h * sc.p;
+        // A plain loop: GCC 12 leaves Eigen's `grad.col(b) = sc.p` out of line here, 5 % of
+        // the seed scene's step (perf, `sesi bench --scene paper`).
+        for (Eigen::Index i = 0; i < sc.p.size(); ++i) {
+          grad(i, b) = sc.p(i);
+          s.p(i, b) -= h * sc.p(i);
+        }
       });
     }
   }

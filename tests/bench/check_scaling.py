@@ -13,7 +13,7 @@ import subprocess
 import sys
 
 COLUMNS = ["n_bodies", "space", "dim", "potential", "method", "threads", "seconds_per_step",
-           "pairs_per_step", "ns_per_pair", "peak_rss_mb"]
+           "pairs_per_step", "ns_per_pair", "peak_rss_mb", "center_distance"]
 
 
 def read(path):
@@ -37,7 +37,10 @@ def main():
 
     for option, args in [("--space", ["--space", "torus"]), ("--n", ["--n", "100,x"]),
                          ("--methods", ["--methods", "sesi3"]), ("--potential", ["--potential", "coulomb"]),
-                         ("--center-distance", ["--center-distance", "2"]), ("--threads", ["--threads", "-1"])]:
+                         ("--center-distance", ["--center-distance", "2"]), ("--threads", ["--threads", "-1"]),
+                         ("--center-distance", ["--space", "hyperbolic", "--center-distance", "0,x"]),
+                         ("--center-distance", ["--space", "hyperbolic", "--center-distance", "31"]),
+                         ("--repeats", ["--repeats", "-1"])]:
         out = os.path.join(a.work, "scaling-bad")
         r = run(args, out)
         if r.returncode != 2 or len(r.stderr.strip().splitlines()) != 1 or option not in r.stderr or \
@@ -46,7 +49,8 @@ def main():
 
     cases = [
         (["--space", "sphere", "--dim", "2", "--n", "300,600", "--steps", "5", "--threads", "1,2"], "sphere", 2, 2, True),
-        (["--space", "hyperbolic", "--dim", "2", "--center-distance", "5", "--n", "300", "--steps", "5"],
+        (["--space", "hyperbolic", "--dim", "2", "--center-distance", "0,5", "--n", "300", "--steps", "5",
+          "--repeats", "2"],
          "hyperbolic", 2, 1, True),
         (["--space", "sphere", "--dim", "3", "--n", "300", "--steps", "5", "--methods", "sesi2,sesi4"],
          "sphere", 3, 1, True),
@@ -70,7 +74,9 @@ def main():
             continue
         sizes = [int(n) for n in args[args.index("--n") + 1].split(",")]
         methods = args[args.index("--methods") + 1].split(",") if "--methods" in args else ["sesi2"]
-        expected = len(sizes) * (len(methods) * threads_given * 2 + (1 if lj else 0))
+        distances = [float(d) for d in args[args.index("--center-distance") + 1].split(",")] \
+            if "--center-distance" in args else [0.0]
+        expected = len(sizes) * (len(methods) * threads_given * (len(distances) + 1) + (1 if lj else 0))
         if len(rows) != expected:
             failures.append(f"{args}: {len(rows)} rows, expected {expected}")
         for row in rows:
@@ -82,6 +88,9 @@ def main():
                 continue
             if abs(float(row["ns_per_pair"]) - t / pairs * 1e9) > 1e-3 * t / pairs * 1e9:
                 failures.append(f"{args}: ns_per_pair {row['ns_per_pair']} is not seconds / pairs")
+            d = float(row["center_distance"])
+            if (row["space"] == "hyperbolic" and d not in distances) or (row["space"] != "hyperbolic" and d != 0):
+                failures.append(f"{args}: center_distance {d} in {row}")
             if row["space"] == "flat-periodic":
                 continue
             if row["space"] not in (space, "euclidean") or (row["space"] == "euclidean" and row["dim"] != "3"):
@@ -91,6 +100,14 @@ def main():
                 failures.append(f"{args}: gravity pairs per step {pairs}, expected {n * (n - 1) / 2 * per_step}")
             if lj and not (0.5 * n * per_step < pairs < 20 * n * per_step):
                 failures.append(f"{args}: {pairs} Lennard-Jones pairs per step at density 1/2 for {n} bodies")
+        if len(distances) > 1:
+            for n in sizes:
+                seen = sorted(float(row["center_distance"]) for row in rows
+                              if row["space"] == space and int(row["n_bodies"]) == n)
+                if seen != sorted(distances):
+                    failures.append(f"{args}: distances {seen} at N = {n}")
+            if "far (5 R) / origin" not in r.stdout:
+                failures.append(f"{args}: no far / origin ratio in the summary")
         if "--threads" in args:
             counts = sorted({row["threads"] for row in rows if row["space"] == space})
             if counts != ["1", "2"]:

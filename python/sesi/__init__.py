@@ -1,0 +1,274 @@
+"""sesi: explicit, time-reversible, symplectic integration on spheres, hyperbolic spaces and flat
+space, from Python (docs/python.md).
+
+    import sesi
+    sim = sesi.Simulation(space="sphere", dim=2, radius=1.0)
+    sim.add_body(mass=1.0, x=[1, 0, 0], v=[0, 0.3, 0])
+    sim.add_body(mass=1.0, x=[0, 1, 0], v=[-0.3, 0, 0])
+    sim.add_potential("cotangent-gravity", G=1.0)
+    sim.method = "sesi4"; sim.dt = 0.01
+    sim.integrate(10.0)
+    print(sim.t, sim.x, sim.energy())
+
+The scene, its checks and messages, the methods and the step loop are those of `sesi run`
+(one compiled library): a Simulation is a scene file's document built in Python, and a run of it
+takes the same steps, bit for bit, as `sesi run` on that file.
+"""
+import copy
+
+from ._sesi import Core as _Core
+from ._sesi import InputError
+from ._sesi import methods as _methods
+from ._sesi import paper_exact as _paper_exact
+from ._sesi import potentials as _potentials
+
+__all__ = ["Simulation", "InputError", "InstabilityError", "methods", "potentials", "paper_exact"]
+
+InputError.__doc__ = """Bad input: a scene key, a value, a setting. A ValueError whose message is the
+one line `sesi run` prints for the same mistake (with the key path, e.g. bodies[2].x)."""
+
+
+class InstabilityError(RuntimeError):
+    """A run stopped on a failed check: a non-finite state, the energy guard or a close encounter.
+
+    The message names what failed, the bodies, the step and the time. The simulation is left at
+    its last state known good (the last checked step). Attributes: reason, detail, step, t, body
+    (1-based, 0 when not known), and output: for Simulation.run, the rows up to the last good
+    state (the run's output, incomplete).
+    """
+
+    def __init__(self, message, reason="", detail="", step=0, t=0.0, body=0, output=None):
+        super().__init__(message)
+        self.reason = reason
+        self.detail = detail
+        self.step = step
+        self.t = t
+        self.body = body
+        self.output = output
+
+
+def methods():
+    """The methods of `sesi run --method`: a list of dicts with name, order, stages (force
+    evaluations per step) and about (the coefficients' source)."""
+    return _methods()
+
+
+def potentials():
+    """The potential kinds of the scene format: a list of dicts with kind, keys, defaults and
+    energy (docs/scene-format.md)."""
+    return _potentials()
+
+
+def paper_exact(t):
+    """The exact embedding points of the seed scene's three bodies at the times t (a number or a
+    sequence): an array of shape (len(t), 3, 3) (include/sesi/scenes/paper.hpp,
+    ../shared/paper-scene.md). Simulation.paper() is that scene."""
+    import numpy
+
+    times = numpy.atleast_1d(numpy.asarray(t, dtype=float))
+    return _paper_exact(times.tolist())
+
+
+class Simulation:
+    """A scene (space, bodies, potentials, integrator settings) and its state.
+
+    Built with the constructor and add_body / add_potential, or read with from_toml / from_dict
+    (the keys of the scene format, docs/scene-format.md). The scene is read and checked as a
+    whole, with the program's messages, when the simulation is first used (a state, energy(),
+    integrate(), run()); bodies and potentials are fixed from then on, the integrator settings
+    (method, dt, energy_guard, threads, check_every) may change between runs.
+    """
+
+    def __init__(self, space="sphere", dim=2, radius=None, name=None):
+        doc = {"space": {"kind": space, "dim": dim}}
+        if radius is not None:
+            doc["space"]["radius"] = radius
+        if name is not None:
+            doc["name"] = name
+        self._init(doc, "<simulation>")
+
+    def _init(self, doc, source):
+        self._doc = doc
+        self._doc.setdefault("bodies", [])
+        self._doc.setdefault("potential", [])
+        self._doc.setdefault("integrator", {})
+        self._source = source
+        self._functions = []  # (value, gradient) of the Python potentials
+        self._core = None
+
+    # ---- building ------------------------------------------------------------------------
+
+    @classmethod
+    def from_dict(cls, doc, source="<dict>"):
+        """A simulation of a scene given as a dict with the scene file's keys (space, bodies,
+        potential, integrator, name); lists and NumPy arrays for vectors. Checked at once."""
+        if not isinstance(doc, dict):
+            raise InputError(f"{source}: expected a dict of the scene format's keys, got {type(doc).__name__}")
+        sim = cls.__new__(cls)
+        sim._init(copy.deepcopy(doc), source)
+        sim._start()
+        return sim
+
+    @classmethod
+    def from_toml(cls, path):
+        """A simulation of the scene file at path, read as `sesi run path` reads it (the same
+        checks and messages, with file and line)."""
+        sim = cls.__new__(cls)
+        sim._init({}, str(path))
+        sim._core = _Core.from_file(str(path))
+        return sim
+
+    @classmethod
+    def paper(cls):
+        """The seed paper's scene (`sesi run` without a scene): three bodies on S^2, SESI 4 at
+        dt = 0.1; its exact solution is sesi.paper_exact(t)."""
+        sim = cls.__new__(cls)
+        sim._init({}, "<default scene>")
+        sim._core = _Core.paper()
+        return sim
+
+    def add_body(self, mass=1.0, x=None, v=None, q=None, p=None):
+        """Add a body: its mass and either its embedding point x and velocity v, or its chart
+        coordinates q and momenta p (docs/scene-format.md, [[bodies]])."""
+        self._building("add_body")
+        body = {"mass": mass, "x": x, "v": v, "q": q, "p": p}
+        self._doc["bodies"].append({k: val for k, val in body.items() if val is not None})
+
+    def add_bodies(self, mass, x=None, v=None, q=None, p=None):
+        """Add many bodies: mass a number or one per body, and per-body rows of x and v (or q
+        and p), e.g. NumPy arrays of shape (N, n + 1)."""
+        rows = x if x is not None else q
+        if rows is None:
+            raise InputError("add_bodies: give x (with v) or q (with p)")
+        count = len(rows)
+        masses = [mass] * count if isinstance(mass, (int, float)) else list(mass)
+        if len(masses) != count:
+            raise InputError(f"add_bodies: {len(masses)} masses for {count} bodies")
+        for k in range(count):
+            self.add_body(mass=masses[k],
+                          x=None if x is None else x[k], v=None if v is None else v[k],
+                          q=None if q is None else q[k], p=None if p is None else p[k])
+
+    def add_potential(self, kind=None, value=None, gradient=None, **keys):
+        """Add a potential term: a kind of the scene format with its keys, e.g.
+        add_potential("cotangent-gravity", G=1.0) (sesi.potentials() lists them); or a Python
+        external potential add_potential(value=f, gradient=g) with f(x, m) -> float and
+        g(x, m) -> dV/dx on a body's embedding point x (a NumPy vector) and mass m. Python
+        potentials are slow (a call per body and force evaluation, on one thread): for
+        prototyping."""
+        self._building("add_potential")
+        if value is not None or gradient is not None:
+            if kind is not None or keys:
+                raise InputError("add_potential: give either a kind with its keys or value= and gradient=")
+            if not callable(value) or not callable(gradient):
+                raise InputError("add_potential: value and gradient must both be callables f(x, m)")
+            self._functions.append((value, gradient))
+            return
+        if kind is None:
+            raise InputError("add_potential: missing the kind (one of "
+                             + ", ".join(k["kind"] for k in potentials()) + ")")
+        self._doc["potential"].append({"kind": kind, **keys})
+
+    def _building(self, what):
+        if self._core is not None:
+            raise InputError(f"{what}: the simulation has started; bodies and potentials are fixed "
+                             "(make a new Simulation, e.g. from sim.x and sim.v)")
+
+    def _start(self):
+        if self._core is None:
+            # Empty tables and lists are absent keys (the reader refuses an empty [[potential]]).
+            doc = {k: v for k, v in self._doc.items() if not (isinstance(v, (list, dict)) and len(v) == 0)}
+            self._core = _Core(doc, self._source, list(self._functions))
+        return self._core
+
+    # ---- settings --------------------------------------------------------------------------
+
+    def _setting(self, key, value):
+        if self._core is None:
+            self._doc["integrator"][key] = value
+            return
+        if key == "method":
+            self._core.set_method(value)
+        elif key == "dt":
+            self._core.set_dt(float(value))
+        elif key == "energy_guard":
+            self._core.set_energy_guard(0.0 if value is False else float(value))
+        elif key == "threads":
+            self._core.set_threads(int(value))
+        elif key == "check_every":
+            self._core.set_check_every(int(value))
+
+    method = property(lambda self: self._start().method,
+                      lambda self, value: self._setting("method", value),
+                      doc="The method, a name of sesi.methods() (default sesi4).")
+    dt = property(lambda self: self._start().dt,
+                  lambda self, value: self._setting("dt", value),
+                  doc="The step size (negative integrates backwards).")
+    energy_guard = property(None, lambda self, value: self._setting("energy_guard", value),
+                            doc="The energy guard's threshold on |E - E0| / (K0 + |V0|), or False.")
+    threads = property(None, lambda self, value: self._setting("threads", value),
+                       doc="Threads for forces and diagnostics (0: all cores); results do not depend on it.")
+    check_every = property(None, lambda self, value: self._setting("check_every", value),
+                           doc="Steps between the checks (energy guard, close encounters).")
+
+    # ---- state -------------------------------------------------------------------------------
+
+    t = property(lambda self: self._start().t, doc="The time.")
+    step = property(lambda self: self._start().step, doc="Steps taken.")
+    x = property(lambda self: self._start().x, doc="Embedding points, one row per body.")
+    v = property(lambda self: self._start().v, doc="Embedding velocities, one row per body.")
+    q = property(lambda self: self._start().q, doc="Chart coordinates (the scene's chart), one row per body.")
+    p = property(lambda self: self._start().p, doc="Conjugate momenta, one row per body.")
+    masses = property(lambda self: self._start().masses, doc="The bodies' masses.")
+    dim = property(lambda self: self._start().dim, doc="The dimension n of the space.")
+    space = property(lambda self: self._start().space, doc="sphere, hyperbolic or euclidean.")
+    radius = property(lambda self: self._start().radius, doc="R (1 on euclidean).")
+    momentum_names = property(lambda self: self._start().momentum_names,
+                              doc="Names of the momentum map's components (diagnostics.csv's).")
+
+    @property
+    def n_bodies(self):
+        return self._start().bodies
+
+    def energy(self):
+        """The total energy of the current state."""
+        return self._start().energy()
+
+    def momentum_map(self):
+        """The momentum map (angular momentum in so(n+1), so(n,1), or linear then angular on E^n)."""
+        return self._start().momentum_map()
+
+    # ---- running -------------------------------------------------------------------------------
+
+    def integrate(self, t):
+        """Advance to time t on the grid of dt (the last step shortened to end at t), with the
+        program's checks. Raises InstabilityError (the simulation at its last good state) or
+        KeyboardInterrupt (Ctrl-C, between steps)."""
+        report = self._start().integrate(float(t))
+        self._raise(report, None)
+
+    def run(self, t_end, output_every=1):
+        """Advance to t_end as integrate(), and return the rows: every output_every steps of the
+        simulation's step count, the current state first and the last state: a dict of NumPy
+        arrays t (rows), x, v (rows x bodies x ambient), q, p (rows x bodies x n), energy (rows)
+        and momentum (rows x components, named by momentum_names)."""
+        report, out = self._start().run(float(t_end), int(output_every))
+        self._raise(report, out)
+        return out
+
+    def _raise(self, report, out):
+        if report.complete:
+            return
+        if report.interrupted:
+            raise KeyboardInterrupt
+        message = (f"{report.detail} at step {report.failed_step} (t = {report.failed_t:.6g}); the "
+                   f"simulation is at its last good state, step {self.step} (t = {self.t:.6g})")
+        raise InstabilityError(message, reason=report.reason, detail=report.detail, step=report.failed_step,
+                               t=report.failed_t, body=report.failed_body, output=out)
+
+    def __repr__(self):
+        if self._core is None:
+            return (f"<sesi.Simulation {self._doc['space'].get('kind')} {self._doc['space'].get('dim')}, "
+                    f"{len(self._doc['bodies'])} bodies, not started>")
+        return (f"<sesi.Simulation {self.space} {self.dim}, {self.n_bodies} bodies, t = {self.t:.6g}, "
+                f"method {self.method}>")

@@ -1,0 +1,249 @@
+#include "simulation.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include <pybind11/eigen.h>
+#include <sesi/parallel.hpp>
+
+#include "errors.hpp"
+#include "recorder.hpp"  // momentum_names
+#include "run_sink.hpp"
+#include "scene_table.hpp"
+#include "validate.hpp"
+
+namespace sesi::python {
+
+using program::InputError;
+using program::Origin;
+
+// ---- Python potentials ------------------------------------------------------------------------
+
+PythonFunctions::PythonFunctions(py::function value, py::function gradient)
+    : value_(std::move(value)), gradient_(std::move(gradient)) {}
+
+PythonFunctions::~PythonFunctions() {
+  // The last copy may go in a thread without the GIL (a system's terms, after a run).
+  py::gil_scoped_acquire gil;
+  value_ = py::function();
+  gradient_ = py::function();
+}
+
+double PythonFunctions::value(const Eigen::VectorXd& x, double m) const {
+  py::gil_scoped_acquire gil;
+  return value_(x, m).cast<double>();
+}
+
+void PythonFunctions::gradient(const Eigen::VectorXd& x, double m, Eigen::VectorXd& g) const {
+  py::gil_scoped_acquire gil;
+  const auto out = gradient_(x, m).cast<Eigen::VectorXd>();
+  if (out.size() != x.size()) {
+    throw InputError("add_potential: gradient(x, m) returned " + std::to_string(out.size()) +
+                     " values for a point of " + std::to_string(x.size()) + " coordinates");
+  }
+  g = out;
+}
+
+// ---- the run's sink: rows in memory, the last state known good ------------------------------
+
+namespace {
+
+class ArraySink final : public program::RunSink {
+ public:
+  ArraySink(program::Integrator& integrator, Rows* rows) : integrator_(integrator), rows_(rows) {
+    good_ = integrator.framed_state();
+  }
+  void track(double, const Eigen::VectorXd&) override { good_ = integrator_.framed_state(); }
+  void write_row(const program::Snapshot& s) override {
+    if (!rows_) return;
+    rows_->t.push_back(s.t);
+    rows_->energy.push_back(s.energy);
+    rows_->q.push_back(s.q.transpose());
+    rows_->p.push_back(s.p.transpose());
+    rows_->x.push_back(s.x.transpose());
+    rows_->v.push_back(s.v.transpose());
+    rows_->momentum.push_back(s.momentum);
+  }
+  void set_final(program::Snapshot last) override { final_ = std::move(last); }
+
+  const program::FramedState& good() const { return good_; }
+  const program::Snapshot& final() const { return final_; }
+
+ private:
+  program::Integrator& integrator_;
+  Rows* rows_;
+  program::FramedState good_;
+  program::Snapshot final_;
+};
+
+const Origin option{};  // a setting of the Python API: messages name the key alone
+
+}  // namespace
+
+// ---- Simulation ---------------------------------------------------------------------------------
+
+Simulation::Simulation(const toml::table& doc, const std::string& source,
+                       std::vector<std::shared_ptr<const program::FunctionExternalSpec::Functions>> functions)
+    : scene_(program::read_scene_table(doc, source)) {
+  for (auto& f : functions) {
+    scene_.potentials.emplace_back(program::FunctionExternalSpec{std::move(f)});
+    has_functions_ = true;
+  }
+  rebuild();
+  start_ = program::guard_reference(scene_, *integrator_);
+}
+
+Simulation::Simulation(program::Scene scene) : scene_(std::move(scene)) {
+  rebuild();
+  start_ = program::guard_reference(scene_, *integrator_);
+}
+
+void Simulation::rebuild() {
+  std::unique_ptr<program::Integrator> next = program::make_integrator(scene_);
+  if (integrator_) next->restore(integrator_->framed_state());
+  integrator_ = std::move(next);
+}
+
+Eigen::MatrixXd Simulation::q() const {
+  Eigen::MatrixXd q, p;
+  integrator_->read(q, p);
+  return q.transpose();
+}
+Eigen::MatrixXd Simulation::p() const {
+  Eigen::MatrixXd q, p;
+  integrator_->read(q, p);
+  return p.transpose();
+}
+Eigen::MatrixXd Simulation::x() const { return integrator_->points().transpose(); }
+Eigen::MatrixXd Simulation::v() const { return integrator_->velocities().transpose(); }
+Eigen::VectorXd Simulation::masses() const {
+  Eigen::VectorXd m(scene_.body_count());
+  for (int b = 0; b < scene_.body_count(); ++b) m(b) = scene_.bodies[static_cast<std::size_t>(b)].mass;
+  return m;
+}
+double Simulation::energy() const { return integrator_->energy(); }
+Eigen::VectorXd Simulation::momentum_map() const { return integrator_->momentum_map(); }
+std::vector<std::string> Simulation::momentum_names() const {
+  const bool euclidean = scene_.space.kind == program::SpaceKind::euclidean;
+  return program::momentum_names(euclidean ? scene_.dim() : scene_.dim() + 1, euclidean);
+}
+
+void Simulation::set_method(const std::string& method) {
+  program::check_method(method, option, "method");
+  scene_.integrator.method = method;
+  rebuild();
+}
+void Simulation::set_dt(double dt) {
+  program::check_dt(dt, option, "dt");
+  scene_.integrator.dt = dt;
+}
+void Simulation::set_energy_guard(double threshold) {
+  if (threshold == 0.0) {
+    scene_.integrator.energy_guard = 0.0;  // off
+    return;
+  }
+  program::check_energy_guard(threshold, option, "energy_guard");
+  scene_.integrator.energy_guard = threshold;
+}
+void Simulation::set_threads(long threads) {
+  program::check_threads(threads, option, "threads");
+  scene_.integrator.threads = static_cast<int>(threads);
+}
+void Simulation::set_check_every(long check_every) {
+  if (check_every != 0) program::check_check_every(check_every, option, "check_every");
+  scene_.integrator.check_every = check_every;
+}
+
+void Simulation::first_row(Rows& rows) const {
+  program::Snapshot s;
+  s.t = t_;
+  integrator_->read(s.q, s.p);
+  s.x = integrator_->points();
+  s.v = integrator_->velocities();
+  s.energy = integrator_->energy();
+  s.momentum = integrator_->momentum_map();
+  rows.t.push_back(s.t);
+  rows.energy.push_back(s.energy);
+  rows.q.push_back(s.q.transpose());
+  rows.p.push_back(s.p.transpose());
+  rows.x.push_back(s.x.transpose());
+  rows.v.push_back(s.v.transpose());
+  rows.momentum.push_back(s.momentum);
+}
+
+Report Simulation::advance(double target, long output_every, Rows* rows) {
+  if (!std::isfinite(target)) throw InputError(option, "t", "expected a finite time, got " + program::format_number(target));
+  if (!scene_.integrator.dt) throw InputError(option, "dt", "no step size: set dt before integrating");
+  const double dt = *scene_.integrator.dt;
+  const double sign = dt > 0 ? 1.0 : -1.0;
+  if (sign * (target - t_) < 0.0) {
+    throw InputError(option, "t",
+                     "t = " + program::format_number(target) + " is " + (dt > 0 ? "before" : "after") +
+                         " the simulation's time " + program::format_number(t_) + " with dt = " +
+                         program::format_number(dt) + "; give dt the other sign to go there");
+  }
+  if (output_every < 1) throw InputError(option, "output_every", "expected an integer >= 1");
+  if (rows) first_row(*rows);
+  if (target == t_) return {};
+  program::check_step_count(std::abs(target - t_), dt, option, "t");
+
+  scene_.integrator.t_end = sign * target;
+  scene_.integrator.output_every = output_every;
+  program::RunStart start = start_;
+  start.step = step_;
+  start.t = t_;
+
+  // Python potentials are called with the GIL: one thread, so that an exception they raise comes
+  // back through the loop (never out of a parallel region).
+  sesi::parallel::set_threads(has_functions_ ? 1 : scene_.integrator.threads);
+  const program::FramedState before = integrator_->framed_state();
+  ArraySink sink(*integrator_, rows);
+  std::atomic<bool> stop{false};
+  bool interrupted = false;
+  auto last_poll = std::chrono::steady_clock::now();
+  program::RunControl control;
+  control.interrupted = &stop;
+  control.after_step = [&](long) {
+    // Ctrl-C: Python's handler only flags the signal; it runs (raising KeyboardInterrupt) when
+    // asked with the GIL, here every 50 ms.
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_poll < std::chrono::milliseconds(50)) return;
+    last_poll = now;
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) {
+      interrupted = true;
+      stop.store(true);
+    }
+  };
+
+  program::RunOutcome outcome;
+  try {
+    py::gil_scoped_release release;
+    outcome = program::run_loop(scene_, *integrator_, sink, control, start);
+  } catch (...) {
+    // An exception from a Python potential (or a library invariant): back to the start.
+    integrator_->restore(before);
+    throw;
+  }
+  Report report;
+  report.complete = outcome.complete();
+  report.reason = program::stop_reason_name(outcome.reason);
+  report.detail = outcome.detail;
+  report.failed_step = outcome.failed_step;
+  report.failed_t = outcome.failed_t;
+  report.failed_body = outcome.failed_body;
+  report.interrupted = interrupted;
+  if (outcome.complete()) {
+    step_ = sink.final().step;
+    t_ = sink.final().t;
+  } else {
+    integrator_->restore(sink.good());
+    step_ = sink.final().step;
+    t_ = sink.final().t;
+  }
+  return report;
+}
+
+}  // namespace sesi::python
