@@ -60,7 +60,7 @@ fuzz: deps
 	  -DSESI_BUILD_FUZZ=ON -DSESI_BUILD_TESTS=OFF -DSESI_BUILD_EXAMPLES=OFF -DSESI_INSTALL=OFF
 	cmake --build $(FUZZ_DIR) -j $(JOBS) --target sesi_scene_fuzzer
 	mkdir -p fuzz-out/corpus fuzz-out/artifacts
-	$(FUZZ_DIR)/fuzz/sesi_scene_fuzzer fuzz-out/corpus examples/scenes tests/program/bad fuzz/regressions \
+	$(FUZZ_DIR)/fuzz/sesi_scene_fuzzer fuzz-out/corpus examples/scenes tests/program/scene/bad fuzz/regressions \
 	  -dict=fuzz/scene.dict -max_len=1048576 -max_total_time=$(FUZZ_SECONDS) -artifact_prefix=fuzz-out/artifacts/ \
 	  -print_final_stats=1
 

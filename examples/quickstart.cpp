@@ -15,7 +15,7 @@ int main() {
   x.p << 0.0, 0.0,             // p_theta
          0.4, -0.4;            // p_phi
 
-  sesi::Yoshida4<Chart> stepper;
+  sesi::Sesi4<Chart> stepper;  // the seed's SESI 4 (Yoshida's triple jump)
   const double dt = 1e-3, e0 = sys.energy(x);
   for (int k = 0; k < 10000; ++k) stepper.do_step(sys, x, k * dt, dt);
 

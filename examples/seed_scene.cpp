@@ -33,7 +33,7 @@ int main() {
   const paper::Exact exact;
   std::printf("seed scene: E = %.15f, radial period = %.10f\n", static_cast<double>(exact.energy()),
               static_cast<double>(2 * std::numbers::pi_v<long double> / exact.frequency()));
-  run<sesi::Strang<paper::Chart<>>>("SESI 2", 0.1, 800.0);
-  run<sesi::Yoshida4<paper::Chart<>>>("SESI 4", 0.1, 800.0);
-  run<sesi::Yoshida4<paper::Chart<>>>("SESI 4", 0.01, 800.0);
+  run<sesi::Sesi2<paper::Chart<>>>("SESI 2", 0.1, 800.0);
+  run<sesi::Sesi4<paper::Chart<>>>("SESI 4", 0.1, 800.0);
+  run<sesi::Sesi4<paper::Chart<>>>("SESI 4", 0.01, 800.0);
 }

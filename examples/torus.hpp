@@ -3,25 +3,23 @@
 //   x = ((a + r cos q1) cos q2, (a + r cos q1) sin q2, r sin q1),
 //   metric r^2 dq1^2 + (a + r cos q1)^2 dq2^2.
 // Its kinetic energy has the hierarchy K_1(p_1) + K_2(q_1, p_2), so sesi's steppers integrate it
-// explicitly and symplectically. This chart gives only the concept's minimum (plus an embedding
-// for potentials); the library derives each level's exact flow from it.
+// explicitly and symplectically. BareTorus gives only the concept's minimum, Torus adds an
+// embedding for potentials on points of R^3; the library derives each level's exact flow.
 
 #include <cmath>
 
 #include <Eigen/Core>
+#include <sesi/potentials.hpp>
 
-struct Torus {
+// The chart alone: the concept's minimum (sesi::HierarchicalChart), enough for potentials on the
+// chart's coordinates (sesi::make_chart_potential).
+struct BareTorus {
   using Scalar = double;
   static constexpr int dimension = 2;
-  static constexpr int ambient_dimension = 3;
   using Point = Eigen::Vector2d;
-  using Ambient = Eigen::Vector3d;
 
   double a = 2.0;  // distance from the axis to the tube centre
   double r = 0.5;  // tube radius
-
-  int dim() const { return 2; }
-  int ambient_dim() const { return 3; }
 
   // Level 1: K_1 = p1^2 / (2 m r^2). Level 2: K_2 = p2^2 / (2 m (a + r cos q1)^2).
   double kinetic(int i, const Point& q, double pi, double m) const {
@@ -37,6 +35,20 @@ struct Torus {
     return pi * pi * r * std::sin(q[0]) / (m * rho * rho * rho);
   }
 
+ private:
+  // Diagonal metric coefficient g_ii.
+  double metric(int i, const Point& q) const {
+    if (i == 0) return r * r;
+    const double rho = a + r * std::cos(q[0]);
+    return rho * rho;
+  }
+};
+
+// The chart with its embedding in R^3 (sesi::EmbeddedChart), for potentials on embedding points.
+struct Torus : BareTorus {
+  static constexpr int ambient_dimension = 3;
+  using Ambient = Eigen::Vector3d;
+
   void embed(const Point& q, Ambient& x) const {
     const double rho = a + r * std::cos(q[0]);
     x << rho * std::cos(q[1]), rho * std::sin(q[1]), r * std::sin(q[0]);
@@ -47,17 +59,17 @@ struct Torus {
     const double rho = a + r * c1;
     out << r * (-s1 * c2 * g[0] - s1 * s2 * g[1] + c1 * g[2]), rho * (-s2 * g[0] + c2 * g[1]);
   }
-
- private:
-  // Diagonal metric coefficient g_ii.
-  double metric(int i, const Point& q) const {
-    if (i == 0) return r * r;
-    const double rho = a + r * std::cos(q[0]);
-    return rho * rho;
-  }
 };
 
-// Uniform gravity along -z: V = m g z.
+// Uniform gravity along -z on the chart's coordinates: V = m g r sin q1, dV/dq = (m g r cos q1, 0).
+inline auto chart_gravity(const BareTorus& torus, double g = 1.0) {
+  const double r = torus.r;
+  return sesi::make_chart_potential(
+      [g, r](const BareTorus::Point& q, double m) { return m * g * r * std::sin(q[0]); },
+      [g, r](const BareTorus::Point& q, double m) { return BareTorus::Point(m * g * r * std::cos(q[0]), 0.0); });
+}
+
+// Uniform gravity along -z on embedding points: V = m g z.
 struct Gravity {
   double g = 1.0;
   double value(const Torus&, const Torus::Ambient& x, double m) const { return m * g * x[2]; }

@@ -1,4 +1,4 @@
-// libFuzzer target: scene text through the reader and validator (src/scene_reader.cpp), as
+// libFuzzer target: scene text through the reader and validator (src/scene/scene_reader.cpp), as
 // `sesi run scene.toml` reads it. Bad input must end in InputError (the program's exit 2);
 // anything else that escapes -- another exception, a sanitizer report, a crash -- is a finding.
 #include <cstddef>

@@ -18,6 +18,8 @@ namespace sesi {
 constexpr int plus_one(int n) { return n == Eigen::Dynamic ? Eigen::Dynamic : n + 1; }
 
 /// The minimum a chart must provide: the level terms and their derivatives, for a body of mass m.
+/// Its dimension is declared once: `C::dimension`, and `c.dim()` only when that is Eigen::Dynamic
+/// (sesi::dim_of reads either).
 template <class C>
 concept HierarchicalChart =
     requires(const C& c, const typename C::Point& q, typename C::Scalar pi, typename C::Scalar m,
@@ -25,14 +27,15 @@ concept HierarchicalChart =
       typename C::Scalar;
       typename C::Point;  // Eigen column vector of size C::dimension (chart coordinates or momenta)
       { C::dimension } -> std::convertible_to<int>;
-      { c.dim() } -> std::convertible_to<int>;
       { c.kinetic(i, q, pi, m) } -> std::convertible_to<typename C::Scalar>;        // K_i
       { c.kinetic_dp(i, q, pi, m) } -> std::convertible_to<typename C::Scalar>;     // dK_i/dp_i
       { c.kinetic_dq(i, k, q, pi, m) } -> std::convertible_to<typename C::Scalar>;  // dK_i/dq_k, k<i
-    };
+    } &&
+    (C::dimension != Eigen::Dynamic || requires(const C& c) { { c.dim() } -> std::convertible_to<int>; });
 
 /// A chart with an embedding in an ambient vector space, so that potentials written on ambient
-/// points apply to it: x = embed(q), and the pull-back of an ambient gradient, J(q)^T g.
+/// points apply to it: x = embed(q), and the pull-back of an ambient gradient, J(q)^T g. The
+/// ambient dimension is declared once as the dimension is (`c.ambient_dim()` only when dynamic).
 template <class C>
 concept EmbeddedChart =
     HierarchicalChart<C> &&
@@ -40,10 +43,101 @@ concept EmbeddedChart =
              const typename C::Ambient& g, typename C::Ambient& x) {
       typename C::Ambient;
       { C::ambient_dimension } -> std::convertible_to<int>;
-      { c.ambient_dim() } -> std::convertible_to<int>;
       c.embed(q, x);         // x = embedding of q
       c.pullback(q, g, out); // out = J(q)^T g, J = dx/dq
-    };
+    } &&
+    (C::ambient_dimension != Eigen::Dynamic ||
+     requires(const C& c) { { c.ambient_dim() } -> std::convertible_to<int>; });
+
+/// A chart's dimension: C::dimension when fixed, else c.dim().
+template <class C>
+int dim_of(const C& c) {
+  if constexpr (C::dimension != Eigen::Dynamic) {
+    static_cast<void>(c);
+    return C::dimension;
+  } else {
+    return c.dim();
+  }
+}
+/// A chart's ambient dimension: C::ambient_dimension when fixed, else c.ambient_dim() (charts
+/// without an embedding: their dimension).
+template <class C>
+int ambient_dim_of(const C& c) {
+  if constexpr (!requires { C::ambient_dimension; }) {
+    return dim_of(c);
+  } else if constexpr (C::ambient_dimension != Eigen::Dynamic) {
+    static_cast<void>(c);
+    return C::ambient_dimension;
+  } else {
+    return c.ambient_dim();
+  }
+}
+
+namespace detail {
+/// The requirements of HierarchicalChart and EmbeddedChart one by one, each with its own
+/// message: sesi::System instantiates these, so that a chart missing a member is told which
+/// (a concept's failure names only the concept). docs/concepts.md shows the first lines.
+template <class C>
+constexpr bool report_hierarchical_chart() {
+  static_assert(requires { typename C::Scalar; },
+                "sesi: the chart needs `using Scalar = ...;` (its floating-point type)");
+  static_assert(requires { typename C::Point; },
+                "sesi: the chart needs `using Point = ...;` (an Eigen column vector of its dimension)");
+  static_assert(requires { { C::dimension } -> std::convertible_to<int>; },
+                "sesi: the chart needs `static constexpr int dimension` (Eigen::Dynamic when set at run time)");
+  if constexpr (requires { { C::dimension } -> std::convertible_to<int>; }) {
+    if constexpr (C::dimension == Eigen::Dynamic) {
+      static_assert(requires(const C& c) { { c.dim() } -> std::convertible_to<int>; },
+                    "sesi: a chart of dimension Eigen::Dynamic needs `int dim() const`");
+    }
+  }
+  if constexpr (requires { typename C::Scalar; typename C::Point; }) {
+    using S = typename C::Scalar;
+    using P = typename C::Point;
+    static_assert(requires(const C& c, const P& q, S pi, S m, int i) {
+                    { c.kinetic(i, q, pi, m) } -> std::convertible_to<S>;
+                  },
+                  "sesi: the chart needs `Scalar kinetic(int i, const Point& q, Scalar p_i, Scalar m) const` (K_i)");
+    static_assert(requires(const C& c, const P& q, S pi, S m, int i) {
+                    { c.kinetic_dp(i, q, pi, m) } -> std::convertible_to<S>;
+                  },
+                  "sesi: the chart needs `Scalar kinetic_dp(int i, const Point& q, Scalar p_i, Scalar m) const` "
+                  "(dK_i/dp_i)");
+    static_assert(requires(const C& c, const P& q, S pi, S m, int i, int k) {
+                    { c.kinetic_dq(i, k, q, pi, m) } -> std::convertible_to<S>;
+                  },
+                  "sesi: the chart needs `Scalar kinetic_dq(int i, int k, const Point& q, Scalar p_i, Scalar m) "
+                  "const` (dK_i/dq_k for k < i)");
+  }
+  return true;
+}
+template <class C>
+constexpr bool report_embedded_chart() {
+  static_assert(requires { typename C::Ambient; },
+                "sesi: potential terms act on embedding points; the chart needs `using Ambient = ...;` (an Eigen "
+                "column vector of the ambient dimension)");
+  static_assert(requires { { C::ambient_dimension } -> std::convertible_to<int>; },
+                "sesi: potential terms act on embedding points; the chart needs `static constexpr int "
+                "ambient_dimension`");
+  if constexpr (requires { { C::ambient_dimension } -> std::convertible_to<int>; }) {
+    if constexpr (C::ambient_dimension == Eigen::Dynamic) {
+      static_assert(requires(const C& c) { { c.ambient_dim() } -> std::convertible_to<int>; },
+                    "sesi: potential terms act on embedding points; a chart of ambient dimension "
+                    "Eigen::Dynamic needs `int ambient_dim() const`");
+    }
+  }
+  if constexpr (requires { typename C::Point; typename C::Ambient; }) {
+    static_assert(requires(const C& c, const typename C::Point& q, typename C::Ambient& x) { c.embed(q, x); },
+                  "sesi: potential terms act on embedding points; the chart needs `void embed(const Point& q, "
+                  "Ambient& x) const`");
+    static_assert(requires(const C& c, const typename C::Point& q, const typename C::Ambient& g,
+                           typename C::Point& out) { c.pullback(q, g, out); },
+                  "sesi: potential terms act on embedding points; the chart needs `void pullback(const Point& q, "
+                  "const Ambient& g, Point& out) const` (out = J(q)^T g)");
+  }
+  return true;
+}
+}  // namespace detail
 
 /// A chart that supplies its own exact level flow (built-in charts do: it shares the sines).
 template <class C>
@@ -53,13 +147,16 @@ concept HasLevelFlow =
 
 /// A chart that caches the sines and cosines of a body's coordinates (TrigType), so that the
 /// level flows, the embedding and the pull-back of one stage share them (built-in S^n, H^n).
+/// Everything the engine (stepper.hpp, system.hpp) calls on it is stated here.
 template <class C>
 concept HasTrigCache =
-    EmbeddedChart<C> &&
+    EmbeddedChart<C> && std::default_initializable<typename C::TrigType> &&
     requires(const C& c, typename C::Point& q, typename C::Point& p, typename C::TrigType& t,
-             typename C::Ambient& x, typename C::Scalar m, int i) {
-      c.refresh(q, t);                 // t = trig of q
-      c.level_flow(i, q, p, m, m, t);  // exact flow of K_i, t kept in sync with q
+             typename C::Ambient& x, typename C::Scalar m, int i, bool own) {
+      t.resize(i);                           // one entry per coordinate (the workspace sizes it)
+      c.refresh(q, t);                       // t = trig of q
+      c.level_flow(i, q, p, m, m, t, own);   // exact flow of K_i, t kept in sync with q; own =
+                                             // false may leave level i's own entry stale
       c.embed(t, x);
       c.pullback(t, x, p);
     };
@@ -131,7 +228,7 @@ template <HierarchicalChart C>
 typename C::Scalar kinetic_energy(const C& chart, const typename C::Point& q,
                                   const typename C::Point& p, typename C::Scalar m) {
   typename C::Scalar k(0);
-  for (int i = 0; i < chart.dim(); ++i) k += chart.kinetic(i, q, p[i], m);
+  for (int i = 0; i < dim_of(chart); ++i) k += chart.kinetic(i, q, p[i], m);
   return k;
 }
 

@@ -28,7 +28,7 @@ constexpr bool has_translations = requires { Chart::translation_invariant; };
 /// Number of components of the momentum map vector.
 template <EmbeddedChart Chart>
 int momentum_map_size(const Chart& chart) {
-  const int a = chart.ambient_dim();
+  const int a = ambient_dim_of(chart);
   return a * (a - 1) / 2 + (has_translations<Chart> ? a : 0);
 }
 

@@ -33,6 +33,21 @@ concept ExternalTerm = EmbeddedChart<Space> &&
       t.gradient(s, x, m, g);
     };
 
+/// Terms on chart coordinates say so with `using coordinates = sesi::chart_coordinates;` (on E^n
+/// a point and a coordinate vector have the same type).
+struct chart_coordinates {};
+
+/// A potential on chart coordinates: V(q) of one body and dV/dq, with no embedding. Any
+/// HierarchicalChart takes it (sesi::System, docs/concepts.md); q is the body's coordinates as
+/// stepped, so the bodies must stay in the chart itself (no per-body frames).
+template <class T, class Space>
+concept ChartTerm = HierarchicalChart<Space> && std::same_as<typename T::coordinates, chart_coordinates> &&
+    requires(const T& t, const Space& s, const typename Space::Point& q, typename Space::Scalar m,
+             typename Space::Point& g) {
+      { t.value(s, q, m) } -> std::convertible_to<typename Space::Scalar>;
+      t.gradient(s, q, m, g);
+    };
+
 template <class T, class Space>
 concept PairTerm = EmbeddedChart<Space> &&
     requires(const T& t, const Space& s, typename Space::Scalar d, typename Space::Scalar m) {
@@ -287,6 +302,28 @@ struct External {
 };
 template <class Value, class Gradient>
 External<Value, Gradient> make_external(Value v, Gradient g) {
+  return {std::move(v), std::move(g)};
+}
+
+/// A user potential on chart coordinates from two callables: value(q, m) -> Scalar and
+/// gradient(q, m) -> Point (dV/dq), for any HierarchicalChart (ChartTerm).
+template <class Value, class Gradient>
+struct ChartPotential {
+  using coordinates = chart_coordinates;
+  Value value_fn;
+  Gradient gradient_fn;
+  template <class Space>
+  auto value(const Space&, const typename Space::Point& q, typename Space::Scalar m) const {
+    return value_fn(q, m);
+  }
+  template <class Space>
+  void gradient(const Space&, const typename Space::Point& q, typename Space::Scalar m,
+                typename Space::Point& g) const {
+    g = gradient_fn(q, m);
+  }
+};
+template <class Value, class Gradient>
+ChartPotential<Value, Gradient> make_chart_potential(Value v, Gradient g) {
   return {std::move(v), std::move(g)};
 }
 

@@ -82,7 +82,7 @@ bool cluster_centre(const Sys& sys, const State<typename Sys::Chart>& s, typenam
   using Scalar = typename Sys::Scalar;
   using std::sqrt;
   const Chart& chart = sys.chart();
-  const int a = chart.ambient_dim(), n = chart.dim();
+  const int a = ambient_dim_of(chart), n = dim_of(chart);
   typename Chart::Point q(n);
   typename Chart::Ambient x(a), mean = Chart::Ambient::Zero(a);
   for (int b = 0; b < s.bodies(); ++b) {
@@ -125,7 +125,7 @@ bool recentre(const Sys& sys, State<typename Sys::Chart>& s,
     }
     using std::cosh;
     const Chart& chart = sys.chart();
-    const int a = chart.ambient_dim(), n = chart.dim();
+    const int a = ambient_dim_of(chart), n = dim_of(chart);
     typename Chart::Ambient y(a);
     if (!detail::cluster_centre(sys, s, y)) return false;  // (NaN: left to the finiteness check)
     // Its distance r from the frame's origin: cosh r = y_t / R.
@@ -166,7 +166,7 @@ bool enter_cluster_frame(const Sys& sys, State<typename Sys::Chart>& s,
     if (s.framed() || s.clustered) return false;
     using std::cosh;
     const Chart& chart = sys.chart();
-    const int a = chart.ambient_dim(), n = chart.dim();
+    const int a = ambient_dim_of(chart), n = dim_of(chart);
     typename Chart::Ambient y(a);
     // Near the origin or not? The world centre of mass is accurate near the origin; far out its
     // -<m,m>_L cancels to at most eps |m|^2, so it comes out far (or not at all) there too.
@@ -200,7 +200,7 @@ bool enter_cluster_frame(const Sys& sys, State<typename Sys::Chart>& s,
       if constexpr (Rechartable<Chart>) {
         // At (or near) the frame's origin, the chart's polar singularity: home the body there
         // (its own frame), as re-charting would.
-        if (chart.dim() >= 2 && q[0] < policy.min_radius) {
+        if (dim_of(chart) >= 2 && q[0] < policy.min_radius) {
           if (!s.framed()) s.enable_frames(a);
           chart.home(xl, vl, sys.mass(b), policy, s.frames[static_cast<std::size_t>(b)], q, p);
           s.q.col(b) = q;
@@ -245,10 +245,10 @@ Recharted rechart(const Sys& sys, State<typename Sys::Chart>& s,
   if constexpr (Rechartable<Chart>) {
     if (s.clustered && recentre(sys, s, policy)) ++done.recentred;
     const Chart& chart = sys.chart();
-    if (!s.framed()) s.enable_frames(chart.ambient_dim());
-    typename Chart::Point q(chart.dim()), p(chart.dim());
-    typename Chart::Ambient x(chart.ambient_dim()), v(chart.ambient_dim());
-    typename State<Chart>::Frame change(chart.ambient_dim(), chart.ambient_dim());
+    if (!s.framed()) s.enable_frames(ambient_dim_of(chart));
+    typename Chart::Point q(dim_of(chart)), p(dim_of(chart));
+    typename Chart::Ambient x(ambient_dim_of(chart)), v(ambient_dim_of(chart));
+    typename State<Chart>::Frame change(ambient_dim_of(chart), ambient_dim_of(chart));
     for (int b = 0; b < s.bodies(); ++b) {
       q = s.q.col(b);
       p = s.p.col(b);
@@ -291,16 +291,16 @@ State<typename Sys::Chart> in_world_chart(const Sys& sys, const State<typename S
   if constexpr (Rechartable<Chart>) {
     if (!s.framed() && !s.clustered) return out;
     const Chart& chart = sys.chart();
-    typename Chart::Point q(chart.dim()), p(chart.dim());
-    typename Chart::Ambient x(chart.ambient_dim()), v(chart.ambient_dim());
-    typename State<Chart>::Frame frame(chart.ambient_dim(), chart.ambient_dim());
+    typename Chart::Point q(dim_of(chart)), p(dim_of(chart));
+    typename Chart::Ambient x(ambient_dim_of(chart)), v(ambient_dim_of(chart));
+    typename State<Chart>::Frame frame(ambient_dim_of(chart), ambient_dim_of(chart));
     for (int b = 0; b < s.bodies(); ++b) {
       // World = C F_b embed(q_b) (C: the cluster frame, if any). Far out this reading is as
       // ill-conditioned as the chart itself (docs/charts.md, "The cluster frame").
       if (s.framed()) {
         frame = s.frames[static_cast<std::size_t>(b)];
       } else {
-        frame.setIdentity(chart.ambient_dim(), chart.ambient_dim());
+        frame.setIdentity(ambient_dim_of(chart), ambient_dim_of(chart));
       }
       if (s.clustered) frame = (s.cluster * frame).eval();
       // A body never re-charted keeps its coordinates as they are (angles unwrapped).

@@ -3,6 +3,7 @@
 /// Everything of the core library (Eigen only). The odeint interoperation is sesi/odeint.hpp.
 
 #include "sesi/chart.hpp"
+#include "sesi/check_chart.hpp"
 #include "sesi/coefficients.hpp"
 #include "sesi/config.hpp"
 #include "sesi/diagnostics.hpp"

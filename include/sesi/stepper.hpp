@@ -20,6 +20,7 @@
 /// sesi/odeint.hpp adds the stepper_category tag so that integrate_const drives them.
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <type_traits>
 #include <utility>
@@ -114,7 +115,8 @@ class Composition {
   }
 
   /// Forget what the last step left (the trig caches and the last gradient), e.g. after changing
-  /// the system's parameters in place; do_step notices a new q, new frames or another system.
+  /// the system's parameters in place; do_step notices a new q, new frames or another system
+  /// (another sesi::System object, even at the address of the last one).
   void reset() {
     last_q_.resize(0, 0);
     grad_system_ = nullptr;
@@ -198,7 +200,7 @@ class Composition {
     const int top = sys.dim() - 1;
     const std::size_t s = w_.size();
     const bool reuse = q_unchanged && grad_.cols() == x.p.cols() && grad_.rows() == x.p.rows() &&
-                       grad_system_ == static_cast<const void*>(&sys) && grad_frames_ == x.frames &&
+                       same_system(sys) && grad_frames_ == x.frames &&
                        grad_clustered_ == x.clustered && (!x.clustered || grad_cluster_ == x.cluster);
     Scalar pending = w_[0] * dt / Scalar(2);  // half kick carried over from the last stage
     for (std::size_t k = 0; k < s; ++k) {
@@ -220,6 +222,7 @@ class Composition {
     }
     sys.kick_cached(x, pending, ws_, grad_);
     grad_system_ = &sys;
+    if constexpr (requires { sys.instance(); }) grad_instance_ = sys.instance();
     grad_frames_ = x.frames;
     grad_clustered_ = x.clustered;
     if (x.clustered) grad_cluster_ = x.cluster;
@@ -232,12 +235,23 @@ class Composition {
   // The kick-drift-kick form's last gradient: dV/dq at last_q_, for that system and frames.
   typename state_type::Matrix grad_;
   const void* grad_system_ = nullptr;
+  std::uint64_t grad_instance_ = 0;  // sesi::System's stamp: its address is no identity
+  /// Whether sys is the system of the kept gradient: by its stamp (sesi::System), else by its
+  /// address (a system whose parameters change in place needs reset()).
+  template <class Sys>
+  bool same_system(const Sys& sys) const {
+    if constexpr (requires { sys.instance(); }) {
+      return grad_system_ != nullptr && grad_instance_ == sys.instance();
+    } else {
+      return grad_system_ == static_cast<const void*>(&sys);
+    }
+  }
   std::vector<typename state_type::Frame> grad_frames_;
   bool grad_clustered_ = false;  // and the cluster frame (State::cluster) it was taken in
   typename state_type::Frame grad_cluster_ = state_type::identity_frame();
 };
 
-/// The named methods (names as in the sesi program).
+/// The methods by their tables' authors (citations in coefficients.hpp).
 template <class Chart>
 using Strang = Composition<coefficients::Strang, Chart>;
 template <class Chart>
@@ -254,5 +268,24 @@ template <class Chart>
 using McLachlan8 = Composition<coefficients::McLachlan8, Chart>;
 template <class Chart>
 using KahanLi8 = Composition<coefficients::KahanLi8, Chart>;
+
+/// The same methods by the program's names (`sesi run --method sesi4`, sesi.methods() in Python):
+/// SESI p is the seed's SESI of order p (seed paper: SESI 2 and SESI 4), the suffix the table.
+template <class Chart>
+using Sesi2 = Strang<Chart>;
+template <class Chart>
+using Sesi4 = Yoshida4<Chart>;
+template <class Chart>
+using Sesi4Suzuki = Suzuki4<Chart>;
+template <class Chart>
+using Sesi4McLachlan = McLachlan4<Chart>;
+template <class Chart>
+using Sesi6 = Yoshida6<Chart>;
+template <class Chart>
+using Sesi6KahanLi = KahanLi6<Chart>;
+template <class Chart>
+using Sesi8 = McLachlan8<Chart>;
+template <class Chart>
+using Sesi8KahanLi = KahanLi8<Chart>;
 
 }  // namespace sesi

@@ -7,7 +7,9 @@
 
 #include <cmath>
 #include <algorithm>
+#include <atomic>
 #include <concepts>
+#include <cstdint>
 #include <limits>
 #include <tuple>
 #include <type_traits>
@@ -24,6 +26,25 @@
 #include "sesi/state.hpp"
 
 namespace sesi {
+
+namespace detail {
+/// A stamp unique to each System object: a copy, a move or an assignment takes a new one. The
+/// kick-drift-kick stepper keeps the last gradient for the same system, which an address does
+/// not tell (a System rebuilt in a loop with new parameters takes its predecessor's place).
+struct InstanceStamp {
+  std::uint64_t value = next();
+  InstanceStamp() = default;
+  InstanceStamp(const InstanceStamp&) : value(next()) {}
+  InstanceStamp& operator=(const InstanceStamp&) {
+    value = next();
+    return *this;
+  }
+  static std::uint64_t next() {
+    static std::atomic<std::uint64_t> counter{0};
+    return ++counter;
+  }
+};
+}  // namespace detail
 
 /// Per-body trig caches for charts that have them; nothing otherwise.
 template <class Chart>
@@ -55,7 +76,7 @@ struct Workspace : TrigStore<Chart> {
 
   /// One chunk's scratch in the loops over bodies that run on threads (parallel.hpp).
   struct Scratch {
-    Point q, p;
+    Point q, p, gq;  // gq: one chart-coordinate term's dV/dq
     AmbientVector x, y, g, h, acc;
   };
   std::vector<Scratch> scratch;
@@ -77,6 +98,7 @@ struct Workspace : TrigStore<Chart> {
       if (s.q.size() != dim) {
         s.q.resize(dim);
         s.p.resize(dim);
+        s.gq.resize(dim);
       }
       if (s.x.size() != ambient) {
         s.x.resize(ambient);
@@ -121,8 +143,35 @@ struct Workspace : TrigStore<Chart> {
   }
 };
 
-template <HierarchicalChart Chart_, class... Terms>
+namespace detail {
+/// A potential term's requirements, with a message that names both concepts (System's check).
+template <class Term, class Chart>
+constexpr bool report_term() {
+  static_assert(ChartTerm<Term, Chart> || ExternalTerm<Term, Chart> || PairTerm<Term, Chart>,
+                "sesi: a potential term must model ExternalTerm (value(chart, x, m) and gradient(chart, x, m, g) "
+                "on an embedding point x), PairTerm (distance_kind, value(chart, d, m_i, m_j) and "
+                "derivative(chart, d, m_i, m_j)) or ChartTerm (coordinates, value(chart, q, m) and "
+                "gradient(chart, q, m, g) on chart coordinates q); docs/concepts.md");
+  return true;
+}
+/// The chart's and the terms' requirements, each failure with its own message. Only terms on
+/// embedding points need an embedded chart.
+template <class Chart, class... Terms>
+constexpr bool report_system() {
+  static_cast<void>(report_hierarchical_chart<Chart>());
+  if constexpr (HierarchicalChart<Chart> && sizeof...(Terms) > 0) {
+    if constexpr (((!ChartTerm<Terms, Chart>) || ...)) static_cast<void>(report_embedded_chart<Chart>());
+    static_cast<void>((report_term<Terms, Chart>() && ...));
+  }
+  return true;
+}
+}  // namespace detail
+
+template <class Chart_, class... Terms>
 class System {
+  // First, so that a mistake in the chart or a term is the first error (docs/concepts.md).
+  static_assert(detail::report_system<Chart_, Terms...>());
+
  public:
   using Chart = Chart_;
   using Scalar = typename Chart::Scalar;
@@ -131,6 +180,9 @@ class System {
   static constexpr int ambient_dimension = detail::ambient_dimension_of<Chart>();
 
   static constexpr bool has_potential = sizeof...(Terms) > 0;
+  /// Terms on embedding points (they need an EmbeddedChart), and terms on chart coordinates.
+  static constexpr bool has_embedded_terms = ((!ChartTerm<Terms, Chart>) || ... || false);
+  static constexpr bool has_chart_terms = (ChartTerm<Terms, Chart> || ... || false);
 
   /// External terms with force centres that a cluster frame can move: a public world centre
   /// `center` on which the value depends through the distance only (CentralCotangent), or an
@@ -162,8 +214,6 @@ class System {
   Term in_cluster_frame(const Term& term, const sesi::Workspace<Chart>& w) const {
     return w.clustered ? localized(term, w) : term;
   }
-  static_assert(!has_potential || EmbeddedChart<Chart>,
-                "potential terms act on embedding points: the chart must model EmbeddedChart");
 
   using Workspace = sesi::Workspace<Chart>;
   using AmbientVectorOf = typename Workspace::AmbientVector;
@@ -177,7 +227,9 @@ class System {
   const std::vector<Scalar>& masses() const { return masses_; }
   Scalar mass(int b) const { return masses_[static_cast<std::size_t>(b)]; }
   int bodies() const { return static_cast<int>(masses_.size()); }
-  int dim() const { return chart_.dim(); }
+  int dim() const { return dim_of(chart_); }
+  /// This object's stamp (detail::InstanceStamp): equal for one object only, whatever its address.
+  std::uint64_t instance() const { return instance_.value; }
   const std::tuple<Terms...>& terms() const { return terms_; }
 
   /// How pair sums are formed. automatic: below rows_from bodies the symmetric loop over pairs
@@ -202,11 +254,7 @@ class System {
     return w;
   }
   int ambient_dim() const {
-    if constexpr (EmbeddedChart<Chart>) {
-      return chart_.ambient_dim();
-    } else {
-      return chart_.dim();
-    }
+    return ambient_dim_of(chart_);
   }
 
   Scalar kinetic_energy(const StateType& s) const {
@@ -258,10 +306,10 @@ class System {
     if constexpr (!has_potential) {
       return Scalar(0);
     } else {
-      embed_all(s, w);
+      if constexpr (has_embedded_terms) embed_all(s, w);
       Scalar v(0);
       int index = 0;
-      std::apply([&](const auto&... term) { ((v += term_energy(term, w, index++)), ...); }, terms_);
+      std::apply([&](const auto&... term) { ((v += any_term_energy(term, s, w, index++)), ...); }, terms_);
       return v;
     }
   }
@@ -281,7 +329,7 @@ class System {
   void ambient_gradient(Workspace& w) const {
     w.G.setZero();
     int index = 0;
-    std::apply([&](const auto&... term) { (add_term_gradient(term, w, index++), ...); }, terms_);
+    std::apply([&](const auto&... term) { (add_embedded_gradient(term, w, index++), ...); }, terms_);
   }
 
   /// The potential kick: p -= h dV/dq, with dV/dq = J(q)^T dV/dx per body.
@@ -296,10 +344,9 @@ class System {
   /// them in sync through the level flows, so a kick computes no sine).
   void kick_cached(StateType& s, Scalar h, Workspace& w) const {
     if constexpr (has_potential) {
-      embed_cached(s, w);
-      ambient_gradient(w);
+      prepare_gradients(s, w);
       for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
-        pull_back(s, w, b, sc);
+        body_gradient(s, w, b, sc);
         s.p.col(b) -= h * sc.p;
       });
     }
@@ -308,11 +355,10 @@ class System {
   /// for a stepper that reuses it while q and the frames stay as they are.
   void kick_cached(StateType& s, Scalar h, Workspace& w, typename StateType::Matrix& grad) const {
     if constexpr (has_potential) {
-      embed_cached(s, w);
-      ambient_gradient(w);
+      prepare_gradients(s, w);
       grad.resize(dim(), bodies());
       for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
-        pull_back(s, w, b, sc);
+        body_gradient(s, w, b, sc);
         // A plain loop: GCC 12 leaves Eigen's `grad.col(b) = sc.p` out of line here, 5 % of
         // the seed scene's step (perf, `sesi bench --scene paper`).
         for (Eigen::Index i = 0; i < sc.p.size(); ++i) {
@@ -328,16 +374,77 @@ class System {
                           typename StateType::Matrix& out) const {
     out.setZero(dim(), bodies());
     if constexpr (has_potential) {
-      embed_all(s, w);
-      ambient_gradient(w);
+      refresh(s, w);
+      prepare_gradients(s, w);
       for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
-        pull_back(s, w, b, sc);
+        body_gradient(s, w, b, sc);
         out.col(b) = sc.p;
       });
     }
   }
 
  private:
+  /// Before the per-body gradients: the embedding points and their ambient gradients (terms on
+  /// embedding points), w's trig caches holding the trig of s.q.
+  void prepare_gradients(const StateType& s, Workspace& w) const {
+    if constexpr (has_chart_terms) {
+      SESI_CHECK(!s.framed() && !s.clustered,
+                 "chart-coordinate terms (ChartTerm) see the coordinates as stepped: bodies with frames have "
+                 "other charts' coordinates");
+    }
+    if constexpr (has_embedded_terms) {
+      embed_cached(s, w);
+      ambient_gradient(w);
+    } else {
+      static_cast<void>(s);
+      static_cast<void>(w);
+    }
+  }
+  /// sc.p = dV/dq of body b: the embedding terms' pulled back, plus the chart terms'.
+  void body_gradient(const StateType& s, Workspace& w, int b, typename Workspace::Scratch& sc) const {
+    if constexpr (has_embedded_terms) {
+      pull_back(s, w, b, sc);
+    } else {
+      sc.p.setZero();
+    }
+    if constexpr (has_chart_terms) {
+      sc.q = s.q.col(b);
+      std::apply([&](const auto&... term) { (add_chart_gradient(term, b, sc), ...); }, terms_);
+    }
+  }
+  template <class Term>
+  void add_chart_gradient(const Term& term, int b, typename Workspace::Scratch& sc) const {
+    if constexpr (ChartTerm<Term, Chart>) {
+      if (inactive(term)) return;
+      sc.gq.setZero();
+      term.gradient(chart_, sc.q, mass(b), sc.gq);
+      sc.p += sc.gq;
+    }
+  }
+  /// A term on embedding points adds its ambient gradient to w.G; a chart term adds nothing here
+  /// (body_gradient adds its dV/dq).
+  template <class Term>
+  void add_embedded_gradient(const Term& term, Workspace& w, int index) const {
+    if constexpr (!ChartTerm<Term, Chart>) add_term_gradient(term, w, index);
+  }
+  /// A term's energy: on chart coordinates from s.q, else from w's embedding points.
+  template <class Term>
+  Scalar any_term_energy(const Term& term, const StateType& s, Workspace& w, int index) const {
+    if constexpr (ChartTerm<Term, Chart>) {
+      static_cast<void>(index);
+      if (inactive(term)) return Scalar(0);
+      SESI_CHECK(!s.framed() && !s.clustered, "chart-coordinate terms need the bodies in the chart itself");
+      w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
+      for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+        sc.q = s.q.col(b);
+        w.rows[static_cast<std::size_t>(b)] = term.value(chart_, sc.q, mass(b));
+      });
+      return parallel::sum_in_order(w.rows);
+    } else {
+      return term_energy(term, w, index);
+    }
+  }
+
   /// w.X from the caches (or from q for charts without them): the cluster-local points
   /// F_b embed(q_b) (world = C F_b embed(q_b) with C = s.cluster when s.clustered).
   void embed_cached(const StateType& s, Workspace& w) const {
@@ -768,6 +875,7 @@ class System {
   Chart chart_;
   std::vector<Scalar> masses_;
   std::tuple<Terms...> terms_;
+  detail::InstanceStamp instance_;
   PairSearch pair_search_ = PairSearch::automatic;
   Scalar neighbour_skin_ = Scalar(default_skin_fraction);
 };

@@ -118,3 +118,100 @@ TEST_CASE("generic: a forwarding chart equals the cached path in float and long 
   check_all<sesi::Sphere<3, float>>(10);
   check_all<sesi::Hyperbolic<3, long double>>(10);
 }
+
+// Issue #14's defect: HasTrigCache stated a 6-argument level_flow while the engine calls 7
+// (own_trig) and sizes the cache with resize(int), so a user chart that modelled the concept as
+// written did not compile in the engine. Now the concept states both: a user chart with its own
+// trig cache (a wrapper of the built-in one, so the numbers must be the built-in's to the bit)
+// runs in the engine; a chart with the old 6-argument flow does not model the concept and runs
+// on the generic path instead (equal to round-off, as the forwarding chart above).
+namespace {
+
+template <class Inner>
+class UserCached : public Forwarding<Inner> {
+ public:
+  using typename Forwarding<Inner>::Scalar;
+  using typename Forwarding<Inner>::Point;
+  using typename Forwarding<Inner>::Ambient;
+  struct TrigType {  // the user's own cache type
+    typename Inner::TrigType inner;
+    void resize(int n) { inner.resize(n); }
+  };
+  explicit UserCached(Inner inner) : Forwarding<Inner>(inner), inner_(std::move(inner)) {}
+  using Forwarding<Inner>::embed;
+  using Forwarding<Inner>::pullback;
+  void refresh(const Point& q, TrigType& t) const { inner_.refresh(q, t.inner); }
+  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h, TrigType& t, bool own = true) const {
+    inner_.level_flow(i, q, p, m, h, t.inner, own);
+  }
+  void embed(const TrigType& t, Ambient& x) const { inner_.embed(t.inner, x); }
+  void pullback(const TrigType& t, const Ambient& g, Point& out) const { inner_.pullback(t.inner, g, out); }
+
+ private:
+  Inner inner_;
+};
+
+/// The concept as it was written: a 6-argument cached flow, no resize.
+template <class Inner>
+class SixArgumentCached : public Forwarding<Inner> {
+ public:
+  using typename Forwarding<Inner>::Scalar;
+  using typename Forwarding<Inner>::Point;
+  using typename Forwarding<Inner>::Ambient;
+  struct TrigType {
+    typename Inner::TrigType inner;
+  };
+  explicit SixArgumentCached(Inner inner) : Forwarding<Inner>(inner), inner_(std::move(inner)) {}
+  using Forwarding<Inner>::embed;
+  using Forwarding<Inner>::pullback;
+  void refresh(const Point& q, TrigType& t) const {
+    t.inner.resize(static_cast<int>(q.size()));
+    inner_.refresh(q, t.inner);
+  }
+  void level_flow(int i, Point& q, Point& p, Scalar m, Scalar h, TrigType& t) const {
+    inner_.level_flow(i, q, p, m, h, t.inner);
+  }
+  void embed(const TrigType& t, Ambient& x) const { inner_.embed(t.inner, x); }
+  void pullback(const TrigType& t, const Ambient& g, Point& out) const { inner_.pullback(t.inner, g, out); }
+
+ private:
+  Inner inner_;
+};
+
+template <class Chart, class Inner>
+sesi::State<Inner> run_on(const Scene<Inner>& fast, long steps) {
+  const Chart chart(fast.chart());
+  const Scene<Chart> scene(chart, fast.masses(), Trap<Chart>{std::get<0>(fast.terms()).k, std::get<0>(fast.terms()).c},
+                           std::get<1>(fast.terms()));
+  const auto x0 = initial_state(fast, 13);
+  sesi::State<Chart> y(fast.dim(), fast.bodies());
+  y.q = x0.q;
+  y.p = x0.p;
+  sesi::Composition<co::Yoshida4, Chart, sesi::Splitting::kick_drift_kick> stepper;
+  const double dt = 0.05 * double(steps) / double(steps);  // as run() takes it
+  for (long k = 0; k < steps; ++k) stepper.do_step(scene, y, double(k) * dt, dt);
+  sesi::State<Inner> out(fast.dim(), fast.bodies());
+  out.q = y.q;
+  out.p = y.p;
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("generic: a user chart with its own trig cache runs in the engine") {
+  using Inner = sesi::Sphere<3, double>;
+  static_assert(sesi::HasTrigCache<UserCached<Inner>>);
+  static_assert(!sesi::HasTrigCache<SixArgumentCached<Inner>>);
+  const auto fast = make_scene<Inner>();
+  const long steps = 10;
+  const auto reference = run<sesi::Composition<co::Yoshida4, Inner, sesi::Splitting::kick_drift_kick>>(
+      fast, initial_state(fast, 13), 0.05 * double(steps), steps);
+  const auto cached = run_on<UserCached<Inner>>(fast, steps);
+  CHECK(cached.q == reference.q);  // the same operations as the built-in cache: to the bit
+  CHECK(cached.p == reference.p);
+  const auto generic = run_on<SixArgumentCached<Inner>>(fast, steps);
+  const double n = 3, bound = 2.0 * steps * 3 * (2 * n + 1) * (n + 4) * eps<double>() *
+                                  std::max(size_of(reference), size_of(initial_state(fast, 13)));
+  CHECK(std::max((generic.q - reference.q).cwiseAbs().maxCoeff(), (generic.p - reference.p).cwiseAbs().maxCoeff()) <=
+        bound);
+}

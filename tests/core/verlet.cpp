@@ -13,6 +13,7 @@
 // weight differs by O(h^2) = 1e-3: far above.
 #include <array>
 #include <cmath>
+#include <limits>
 #include <tuple>
 
 #include <doctest/doctest.h>
@@ -118,4 +119,31 @@ TEST_CASE_TEMPLATE("verlet: velocity Verlet in float and long double on E^3", Sc
                    long double) {
   check_verlet<co::Strang, sesi::Splitting::kick_drift_kick, sesi::Euclidean<3, Scalar>>(200);
   check_verlet<co::Strang, sesi::Splitting::drift_kick_drift, sesi::Euclidean<3, Scalar>>(200);
+}
+
+// Issue #14's defect: the kick-drift-kick form reuses the last step's gradient when the system is
+// the same. A System rebuilt in the loop with a new spring constant lands at the address of the
+// last one; an identity by address reused the old constant's gradient (p = -0.2475 after two
+// steps instead of -0.2968 in the issue's scene). Each step here must be velocity Verlet with its
+// own k, to round-off: the two loops round the same operations alike up to the library's order of
+// the half kicks, a few eps of |z| <= 1 per step.
+TEST_CASE("verlet: a System rebuilt every step with new parameters kicks with them") {
+  using Chart = sesi::Euclidean<1, double>;
+  using Scene = sesi::System<Chart, Trap<Chart>>;
+  sesi::Composition<co::Strang, Chart, sesi::Splitting::kick_drift_kick> stepper;
+  sesi::State<Chart> x(1, 1);
+  x.q(0, 0) = 1.0;
+  x.p(0, 0) = 0.0;
+  double q = 1.0, p = 0.0;
+  const double h = 0.1;
+  for (int n = 0; n < 10; ++n) {
+    const double k = 1.0 + 0.5 * n;
+    Scene scene(Chart{}, std::vector<double>{1.0}, Trap<Chart>{k, Chart::Ambient::Zero()});
+    stepper.do_step(scene, x, n * h, h);
+    p -= h / 2 * k * q;  // velocity Verlet with this step's k
+    q += h * p;
+    p -= h / 2 * k * q;
+    CHECK(std::abs(x.q(0, 0) - q) <= 8 * (n + 1) * std::numeric_limits<double>::epsilon());
+    CHECK(std::abs(x.p(0, 0) - p) <= 8 * (n + 1) * std::numeric_limits<double>::epsilon() * (1 + k));
+  }
 }

@@ -1,4 +1,4 @@
-# The scene reader's limits (issue #12, src/scene_limits.cpp): size, parts of a dotted key or a
+# The scene reader's limits (issue #12, src/scene/scene_limits.cpp): size, parts of a dotted key or a
 # table header, nesting of arrays and inline tables, checked before toml++ sees the text. A dotted
 # key of 35,000 parts (an 80 KB file) used to kill sesi with SIGSEGV (a stack overflow in toml++).
 # Exec'd in check_program.py's namespace (case, check, expect_input_error, expect_ok, ...).
