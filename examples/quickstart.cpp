@@ -9,11 +9,9 @@ int main() {
   using Chart = sesi::Sphere<2>;  // hyperspherical angles (theta, phi), radius 1
   sesi::System sys(Chart(1.0), std::vector<double>{1.0, 1.0}, sesi::CotangentGravity<double>{1.0});
 
-  sesi::State<Chart> x(2, 2);  // dimension 2, two bodies; column b is body b
-  x.q << 1.2, 1.9,             // theta of bodies 0 and 1
-         0.0, 0.0;             // phi
-  x.p << 0.0, 0.0,             // p_theta
-         0.4, -0.4;            // p_phi
+  sesi::State<Chart> x(2, 2);              // dimension 2, two bodies; column b is body b
+  x.set_body(0, {1.2, 0.0}, {0.0, 0.4});   // (theta, phi), (p_theta, p_phi)
+  x.set_body(1, {1.9, 0.0}, {0.0, -0.4});
 
   sesi::Sesi4<Chart> stepper;  // the seed's SESI 4 (Yoshida's triple jump)
   const double dt = 1e-3, e0 = sys.energy(x);

@@ -101,9 +101,9 @@ Simulation::Simulation(program::Scene scene) : scene_(std::move(scene)) {
 }
 
 void Simulation::rebuild() {
-  std::unique_ptr<program::Integrator> next = program::make_integrator(scene_);
-  if (integrator_) next->restore(integrator_->framed_state());
-  integrator_ = std::move(next);
+  // At the current state; between a chart method and a geodesic method (whose states are of
+  // different kinds) through the scene's chart.
+  integrator_ = integrator_ ? program::make_integrator(scene_, *integrator_) : program::make_integrator(scene_);
 }
 
 Eigen::MatrixXd Simulation::q() const {
@@ -132,8 +132,14 @@ std::vector<std::string> Simulation::momentum_names() const {
 
 void Simulation::set_method(const std::string& method) {
   program::check_method(method, option, "method");
+  const std::string before = scene_.integrator.method;
   scene_.integrator.method = method;
-  rebuild();
+  try {
+    rebuild();  // refuses a geodesic method on E^n
+  } catch (...) {
+    scene_.integrator.method = before;
+    throw;
+  }
 }
 void Simulation::set_dt(double dt) {
   program::check_dt(dt, option, "dt");

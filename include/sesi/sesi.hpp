@@ -9,6 +9,7 @@
 #include "sesi/diagnostics.hpp"
 #include "sesi/guard.hpp"
 #include "sesi/potentials.hpp"
+#include "sesi/processed.hpp"
 #include "sesi/spaces/euclidean.hpp"
 #include "sesi/spaces/hyperbolic.hpp"
 #include "sesi/spaces/sphere.hpp"

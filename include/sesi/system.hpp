@@ -325,6 +325,17 @@ class System {
     return energy(s, w);
   }
 
+  /// The potential energy of the points in w.X (cluster-local when w.clustered), for states
+  /// held in the embedding (reference::EmbeddedState): the terms summed as potential_energy
+  /// does, so a state with the same points has the same energy to the bit. Terms on embedding
+  /// points only (no ChartTerm: those need chart coordinates).
+  Scalar ambient_potential_energy(Workspace& w) const requires(!has_chart_terms) {
+    Scalar v(0);
+    int index = 0;
+    std::apply([&](const auto&... term) { ((v += term_energy(term, w, index++)), ...); }, terms_);
+    return v;
+  }
+
   /// Ambient gradients of the potential for all bodies into w.G (w.X must hold the points).
   void ambient_gradient(Workspace& w) const {
     w.G.setZero();

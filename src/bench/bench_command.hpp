@@ -22,6 +22,13 @@ struct BenchOptions {
   int repeats = 0;              ///< 0: 3 (1 with --quick)
   std::string figure;           ///< seed-fig1 | convergence (data of the seed's figures)
   std::string form;             ///< seed | program (empty: the scene's, docs/benchmarks.md)
+  std::string dts;              ///< comma-separated fixed steps of every fixed-step method
+  std::string tols;             ///< comma-separated tolerances of every adaptive method
+  double budget = 0;            ///< seconds: finer runs stop after one this long (0: 20, quick 2)
+
+  // --horizons (issue #15): least time to each max energy error level at each run length.
+  std::string horizons;         ///< comma-separated run lengths (empty: no horizon sweep)
+  std::string levels;           ///< comma-separated max energy error levels (empty: the default)
 
   // --scaling (issue #11): time per step against the number of bodies (bench_scaling.hpp).
   bool scaling = false;

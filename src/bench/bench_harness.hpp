@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <span>
 #include <string>
@@ -222,17 +223,38 @@ class Harness {
   /// One row: the error run, then the timed repeats. Returns the slowest single run's seconds.
   double measure(const MethodSpec& m, double param, const Eigen::MatrixXd& reference,
                  Row& row) const {
+    observe(m, param, row);
+    return time_runs(m, param, &reference, s_.repeats, true, row);
+  }
+
+  /// The error run of a row: max energy error and momentum drift over the sample times.
+  void observe(const MethodSpec& m, double param, Row& row) const {
     row.method = std::string(m.name);
     row.order = m.order;
     row.dt_or_tol = param;
+    row.t_end = s_.t_end;
     Recorder rec{this, nullptr, {}};
-    run(m.id, param, times_, rec);
+    if (m.id == Method::rk78 && !s_.horizons.empty()) {
+      rk78_on_own_steps(param, rec);
+    } else {
+      run(m.id, param, times_, rec);
+    }
     row.max_energy_error = rec.max_de;
     row.max_momentum_drift = rec.max_dj;
-    double best = std::numeric_limits<double>::infinity(), worst = 0;
+    row.samples = rec.count;
+  }
+
+  /// Timed runs without observer, `repeats` of them (with more_when_short twice as many when the
+  /// first takes under 0.05 s; one when it takes over half the run budget); keeps the minimum in
+  /// row.wall_seconds (lowering it, when the row was timed before). The first sets steps,
+  /// evaluations and, given a reference, the final error. Returns the slowest run's seconds.
+  double time_runs(const MethodSpec& m, double param, const Eigen::MatrixXd* reference,
+                   int repeats, bool more_when_short, Row& row) const {
+    double best = row.timed_runs > 0 ? row.wall_seconds : std::numeric_limits<double>::infinity();
+    double worst = 0;
     sesi::reference::NoObserver none;
     const std::span<const double> no_times;
-    int repeats = s_.repeats;
+    const int wanted = repeats;
     for (int r = 0; r < repeats; ++r) {
       const auto start = std::chrono::steady_clock::now();
       const Outcome out = run(m.id, param, no_times, none);
@@ -240,16 +262,148 @@ class Harness {
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       best = std::min(best, secs);
       worst = std::max(worst, secs);
+      ++row.timed_runs;
       if (r == 0) {
         row.steps = out.steps;
         row.force_evals = out.evals;
-        row.final_error = distance(out.points, reference);
+        row.final_error = reference ? distance(out.points, *reference)
+                                    : std::numeric_limits<double>::quiet_NaN();
         if (secs > s_.run_budget / 2) break;  // a long run is its own average
-        if (secs < 0.05 && repeats < 2 * s_.repeats) repeats = 2 * s_.repeats;  // noisy: more
+        if (more_when_short && secs < 0.05 && repeats < 2 * wanted) repeats = 2 * wanted;  // noisy
       }
     }
     row.wall_seconds = best;
     return worst;
+  }
+
+  /// The horizon sweep's runs of one method at this harness's t_end (docs/benchmarks.md, "Long
+  /// horizons"): the steps (tolerances) of --dts (--tols) from the coarsest, or else the
+  /// method's ladder, coarser from its start while a run reaches the largest level, then finer
+  /// until a run reaches the smallest level; either way finer runs stop after a run longer than
+  /// the run budget (or one predicted to take three budgets), and on the ladder after three
+  /// rungs without a smaller error (a round-off floor). Every run is timed once; the fastest
+  /// run reaching each level gets the remaining timed repeats.
+  std::vector<Row> horizon_runs(const MethodSpec& m) const {
+    std::vector<Row> rows;
+    if (m.family == Family::embedding && !quadric) {
+      std::fprintf(stderr, "sesi bench: %s skipped (embedding methods need S^n or H^n)\n",
+                   std::string(m.name).c_str());
+      return rows;
+    }
+    const double largest = *std::max_element(s_.levels.begin(), s_.levels.end());
+    const double smallest = *std::min_element(s_.levels.begin(), s_.levels.end());
+    double last_seconds = 0, before_seconds = 0;
+    // One run; false when it failed or diverged (no row).
+    auto attempt = [&](double param) -> const Row* {
+      Row row;
+      try {
+        observe(m, param, row);
+        if (std::isfinite(row.max_energy_error)) {
+          before_seconds = last_seconds;
+          last_seconds = time_runs(m, param, nullptr, 1, false, row);
+        }
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "sesi bench: %s at %g failed (%s); no row\n",
+                     std::string(m.name).c_str(), param, e.what());
+        return nullptr;
+      }
+      if (!std::isfinite(row.max_energy_error)) {
+        std::fprintf(stderr, "sesi bench: %s at %g diverged; no row\n",
+                     std::string(m.name).c_str(), param);
+        return nullptr;
+      }
+      std::fprintf(stderr, "  T %-8g %-16s %-10.4g steps %-10ld %9.3e s  dE %.2e\n", s_.t_end,
+                   row.method.c_str(), param, row.steps, row.wall_seconds, row.max_energy_error);
+      rows.push_back(row);
+      return &rows.back();
+    };
+    // Finer runs only cost more: stop after a long one, or before one predicted too long.
+    auto over_budget = [&] {
+      if (last_seconds > s_.run_budget) return true;
+      return before_seconds > 0 && last_seconds > s_.run_budget / 4 &&
+             last_seconds * (last_seconds / before_seconds) > 3 * s_.run_budget;
+    };
+    const std::vector<double>& given = m.family == Family::adaptive ? s_.tols : s_.dts;
+    if (!given.empty()) {
+      std::vector<double> params = given;
+      std::sort(params.begin(), params.end(), std::greater<>());
+      for (double p : params) {
+        const Row* r = attempt(p);
+        if ((r && r->max_energy_error <= smallest) || over_budget()) break;
+      }
+    } else {
+      const Ladder ladder = horizon_ladder(m);
+      // Coarser while the start already reaches the largest level (cheaper runs might too).
+      const Row* r = attempt(ladder.param(ladder.k_start));
+      const double start_seconds = r ? r->wall_seconds : 0;
+      for (int k = ladder.k_start - 1; r && r->max_energy_error <= largest && k >= ladder.k_min; --k)
+        r = attempt(ladder.param(k));
+      last_seconds = start_seconds;  // the finer rungs go on from the start
+      before_seconds = 0;
+      double best = std::numeric_limits<double>::infinity();
+      int stale = 0;
+      for (const Row& row : rows) best = std::min(best, row.max_energy_error);
+      for (int k = ladder.k_start + 1; best > smallest && k <= ladder.k_max; ++k) {
+        if (over_budget()) break;
+        r = attempt(ladder.param(k));
+        const double e = r ? r->max_energy_error : std::numeric_limits<double>::infinity();
+        if (e < 0.9 * best) {
+          stale = 0;
+        } else if (++stale >= 3) {
+          break;  // no gain from finer steps: round-off (or a diverging method)
+        }
+        best = std::min(best, e);
+      }
+    }
+    // The remaining repeats for the fastest run reaching each level.
+    std::vector<std::size_t> winners;
+    for (double level : s_.levels) {
+      std::size_t w = rows.size();
+      for (std::size_t i = 0; i < rows.size(); ++i)
+        if (rows[i].max_energy_error <= level &&
+            (w == rows.size() || rows[i].wall_seconds < rows[w].wall_seconds))
+          w = i;
+      if (w < rows.size() && std::find(winners.begin(), winners.end(), w) == winners.end())
+        winners.push_back(w);
+    }
+    for (std::size_t w : winners) {
+      Row& row = rows[w];
+      const int total = row.wall_seconds < 0.05 ? 2 * s_.repeats : s_.repeats;
+      if (row.wall_seconds <= s_.run_budget / 2 && total > row.timed_runs)
+        time_runs(m, row.dt_or_tol, nullptr, total - row.timed_runs, false, row);
+    }
+    std::sort(rows.begin(), rows.end(),
+              [](const Row& a, const Row& b) { return a.dt_or_tol > b.dt_or_tol; });
+    return rows;
+  }
+
+  /// rk78's error run in the horizon sweep: the timed run's own steps (odeint's
+  /// integrate_adaptive, observed after every step), each sample time at the first step boundary
+  /// at or after it. (Shortening steps to land on the times, as run() does, makes a run whose
+  /// steps exceed the sample spacing far more accurate than the timed one.)
+  template <class Obs>
+  Outcome rk78_on_own_steps(double tol, Obs& obs) const {
+    namespace ode = boost::numeric::odeint;
+    using Flat = std::vector<double>;
+    sesi::odeint::chart_ode<Sys> f(sys_);
+    Flat y = f.flat(x0_);
+    StateT x;
+    std::size_t j = 0;
+    auto at_step = [&](const Flat& yk, double t) {
+      bool due = false;
+      for (; j < times_.size() && times_[j] <= t; ++j) due = true;
+      if (due) {
+        f.unflat(yk, x);
+        obs(static_cast<const StateT&>(x), t);
+      }
+    };
+    const auto tol_ = tolerance(tol);
+    const long steps = long(ode::integrate_adaptive(
+        ode::make_controlled(tol_.absolute, tol_.relative, ode::runge_kutta_fehlberg78<Flat, double>()),
+        std::ref(f), y, 0.0, s_.t_end, tol_.initial_step, at_step));
+    f.unflat(y, x);
+    if (j < times_.size()) obs(static_cast<const StateT&>(x), s_.t_end);  // round-off at the end
+    return {sesi::embedding_points(sys_, x), steps, long(f.evaluations())};
   }
 
   /// Reference positions at t_end from the order-8 composition sesi8-kahan-li with step
@@ -337,5 +491,24 @@ class Harness {
   Eigen::VectorXd j0_;
   std::vector<double> times_;
 };
+
+/// The horizon sweep (--horizons): every method of the settings at every horizon, each horizon
+/// with its own sample times (settings.samples + 1 of them, from 0 to the horizon).
+template <class Sys>
+std::vector<Row> horizon_sweep(const Sys& sys, const sesi::State<typename Sys::Chart>& x0,
+                               const Settings& settings, const Eigen::MatrixXd& conserved,
+                               SesiForm form) {
+  std::vector<Row> rows;
+  for (double horizon : settings.horizons) {
+    Settings s = settings;
+    s.t_end = horizon;
+    const Harness<Sys> h(sys, x0, s, conserved, form);
+    for (const MethodSpec* m : s.methods) {
+      std::vector<Row> runs = h.horizon_runs(*m);
+      rows.insert(rows.end(), runs.begin(), runs.end());
+    }
+  }
+  return rows;
+}
 
 }  // namespace sesi::program::bench

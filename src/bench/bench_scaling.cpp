@@ -283,6 +283,11 @@ int scaling_command(const BenchOptions& o) {
   const std::vector<long> sizes = parse_list(o.sizes.empty() ? default_sizes : o.sizes, "--n", 2, 10'000'000);
   const std::vector<long> threads = parse_list(o.threads.empty() ? "0" : o.threads, "--threads", 0, 1024);
   const std::vector<std::string> methods = parse_names(o.methods.empty() ? "sesi2" : o.methods);
+  for (const std::string& method : methods) {
+    if (base.space == SpaceKind::euclidean && is_embedded_method(method)) {
+      throw InputError("--methods: '" + method + "' runs on curved spaces only (--space sphere or hyperbolic)");
+    }
+  }
   const bool lj = base.potential == "lennard-jones";
   if (o.steps < 0) throw InputError("--steps: must be > 0");
   const long warm = lj ? 20 : 1;
@@ -343,7 +348,9 @@ int scaling_command(const BenchOptions& o) {
                              Measured{}, stages, d},
                             point, static_cast<int>(t)});
         }
-        if (!flat3) {  // the same bodies' count and density on flat E^3, through sesi
+        // The same bodies' count and density on flat E^3, through sesi (not for a geodesic
+        // method, which runs on S^n and H^n only).
+        if (!flat3 && !is_embedded_method(method)) {
           ScalingPoint flat = point;
           flat.space = SpaceKind::euclidean;
           flat.dim = 3;

@@ -48,6 +48,10 @@ Result bench_paper(const Settings& settings) {
   r.notes.push_back("reference: exact solution (sesi/scenes/paper.hpp, long double)");
   r.notes.push_back(describe(form));
   r.notes.push_back("momentum: all components of the momentum map (L_z, -L_y, L_x)");
+  if (!settings.horizons.empty()) {
+    r.rows = horizon_sweep(sys, paper::initial_state<double>(), settings, Eigen::MatrixXd(), form);
+    return r;
+  }
   r.rows = h.sweep_all(exact_points(settings.t_end));
   return r;
 }

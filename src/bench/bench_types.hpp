@@ -42,6 +42,9 @@ struct Row {
   double final_error = 0;
   double max_energy_error = 0;
   double max_momentum_drift = 0;
+  double t_end = 0;       ///< the run's length (the horizon, with --horizons)
+  long samples = 0;       ///< distinct times the error run observed (a step boundary each)
+  int timed_runs = 0;     ///< timed repeats behind wall_seconds
 };
 
 /// Which form of the base step the sesi* rows run (sesi/stepper.hpp, docs/scheme.md).
@@ -72,6 +75,10 @@ struct Settings {
   /// scene's own choice.
   std::optional<SesiForm> form;
   std::vector<const MethodSpec*> methods;
+  std::vector<double> dts;       ///< --dts: every fixed-step method's steps (empty: its sweep)
+  std::vector<double> tols;      ///< --tols: every adaptive method's tolerances (empty: its sweep)
+  std::vector<double> horizons;  ///< --horizons: run lengths of the horizon sweep (empty: none)
+  std::vector<double> levels;    ///< --levels: max energy error levels of the horizon sweep
 };
 
 /// One sample of a traced run (seed-fig1): body 1's position, the energy error and the
@@ -91,7 +98,18 @@ struct Result {
 };
 
 /// Sweep parameters of a method: steps dt = base / k (fixed-step methods; base = t_end /
-/// samples, so that every sample time is a grid point), or tolerances (adaptive ones).
+/// samples, so that every sample time is a grid point), or tolerances (adaptive ones); --dts
+/// and --tols replace them.
 std::vector<double> sweep(const MethodSpec& m, const Settings& s);
+
+/// The default steps (tolerances) of the horizon sweep: param(k) = 10^(-k / per_decade) for
+/// integers k in [k_min, k_max], started at k_start. Fixed steps of order p take 2p rungs per
+/// decade (the energy error ~ dt^p then moves by about half a decade per rung); tolerances 2.
+struct Ladder {
+  int per_decade = 2;
+  int k_start = 0, k_min = 0, k_max = 0;
+  double param(int k) const;
+};
+Ladder horizon_ladder(const MethodSpec& m);
 
 }  // namespace sesi::program::bench

@@ -19,10 +19,15 @@ std::string run_footer() {
   std::string text = "\nMETHODS (--method, [integrator] method):\n";
   for (const MethodInfo& m : method_catalogue()) {
     char line[160];
-    std::snprintf(line, sizeof line, "  %-16s order %d  %.*s\n", std::string(m.name).c_str(), m.order,
+    std::snprintf(line, sizeof line, "  %-18s order %-2d  %.*s\n", std::string(m.name).c_str(), m.order,
                   static_cast<int>(m.about.size()), m.about.data());
     text += line;
   }
+  text +=
+      "  geodesic*: S^n and H^n only (refused on E^n); the state is the embedding points x and\n"
+      "    velocities v, no chart. On H^n they lose digits like eps e^(2r/R) at distance r from the\n"
+      "    origin (a far pair's separation: 6e-7 off at 10 radii, 3e-4 at 13, where sesi4 is 2e-9\n"
+      "    off); a body beyond 15.7 radii is refused. Far out, use a sesi method (docs/scheme.md).\n";
   text +=
       "\nSCENE FILES (TOML; every key in docs/scene-format.md):\n"
       "  [space]        kind = \"sphere\" | \"hyperbolic\" | \"euclidean\", dim, radius\n"

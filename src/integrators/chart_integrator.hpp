@@ -47,11 +47,19 @@ class ChartIntegrator final : public Integrator {
         x_(initial_state<Chart>(scene)),
         stepper_(make_stepper(scene.integrator.method, sys_)) {
     if constexpr (sesi::ClusterChart<Chart>) enter_cluster_frame(scene);
+    if (stepper_->processed()) {
+      dt_ = scene.integrator.dt.value_or(0.0);
+      initial_ = x_;
+    }
   }
   ChartIntegrator(const ChartIntegrator&) = delete;
   ChartIntegrator& operator=(const ChartIntegrator&) = delete;
 
-  void step(double t, double h) override { stepper_->step(x_, t, h); }
+  void step(double t, double h) override {
+    stepper_->step(x_, t, h);
+    shown_valid_ = false;
+    if (dt_ == 0.0) dt_ = h;  // a processed method's step, when the scene has none
+  }
 
   int first_non_finite_body() const override {
     for (int b = 0; b < x_.bodies(); ++b) {
@@ -59,13 +67,13 @@ class ChartIntegrator final : public Integrator {
     }
     return 0;
   }
-  double energy() override { return sys_.energy(x_, w_); }
-  Eigen::VectorXd momentum_map() override { return sesi::momentum_map(sys_, x_); }
-  Eigen::MatrixXd points() override { return sesi::embedding_points(sys_, x_); }
+  double energy() override { return sys_.energy(shown(), w_); }
+  Eigen::VectorXd momentum_map() override { return sesi::momentum_map(sys_, shown()); }
+  Eigen::MatrixXd points() override { return sesi::embedding_points(sys_, shown()); }
   // (A cluster frame at the identity, as every H^n scene near the origin has, changes nothing.)
   bool clustered() const override { return x_.clustered && !x_.cluster.isIdentity(0.0); }
   Eigen::MatrixXd local_points() override {
-    sys_.embed_all(x_, w_);
+    sys_.embed_all(shown(), w_);
     return w_.X;
   }
   Eigen::VectorXd to_local(const Eigen::VectorXd& world) const override {
@@ -78,25 +86,36 @@ class ChartIntegrator final : public Integrator {
     }
     return world;
   }
-  Eigen::MatrixXd velocities() override { return sesi::embedding_velocities(sys_, x_); }
+  Eigen::MatrixXd velocities() override { return sesi::embedding_velocities(sys_, shown()); }
   int body_with_non_finite_energy() override {
+    const sesi::State<Chart>& x = shown();
     typename Chart::Point q(sys_.dim()), p(sys_.dim());
     for (int b = 0; b < sys_.bodies(); ++b) {
-      q = x_.q.col(b);
-      p = x_.p.col(b);
+      q = x.q.col(b);
+      p = x.p.col(b);
       if (!std::isfinite(sesi::kinetic_energy(sys_.chart(), q, p, sys_.mass(b)))) return b + 1;
     }
     typename SystemOf<Chart>::StateType::Matrix gradient;
-    sys_.potential_gradient(x_, w_, gradient);
+    sys_.potential_gradient(x, w_, gradient);
     for (int b = 0; b < sys_.bodies(); ++b) {
       if (!gradient.col(b).allFinite()) return b + 1;
     }
     return 0;
   }
+  /// A processed method's state is the kernel's variables for the scene's step, before the first
+  /// step the state itself (a state entered with another step, after a shortened last step or a
+  /// change of dt, is moved to the scene's step on a copy): restore takes them up again as such.
   FramedState framed_state() const override {
-    FramedState out{x_.q, x_.p, {}, x_.clustered, {}};
-    out.frames.assign(x_.frames.begin(), x_.frames.end());
-    if (x_.clustered) out.cluster = x_.cluster;
+    sesi::State<Chart> moved;
+    const bool rebase = stepper_->processed() && stepper_->entered_step() != 0.0 && stepper_->entered_step() != dt_;
+    if (rebase) stepper_->reentered(x_, dt_, moved);
+    const sesi::State<Chart>& x = rebase ? moved : x_;
+    FramedState out;
+    out.q = x.q;
+    out.p = x.p;
+    out.clustered = x.clustered;
+    out.frames.assign(x.frames.begin(), x.frames.end());
+    if (x.clustered) out.cluster = x.cluster;
     return out;
   }
   void restore(const FramedState& state) override {
@@ -105,21 +124,49 @@ class ChartIntegrator final : public Integrator {
     x_.frames.assign(state.frames.begin(), state.frames.end());
     x_.clustered = state.clustered;
     if (state.clustered) x_.cluster = state.cluster;
+    shown_valid_ = false;
+    // (The initial state, e.g. another method's before its first step, is the state itself.)
+    if (stepper_->processed()) stepper_->assume_entered(dt_ == 0.0 || same_state(x_, initial_) ? 0.0 : dt_);
   }
   /// In the scene's own chart: bodies re-charted by the stepper are mapped back (q and p of
   /// the outputs and of summary.json always mean the same coordinates).
   void read(Eigen::MatrixXd& q, Eigen::MatrixXd& p) const override {
-    if (x_.framed() || x_.clustered) {
-      const auto world = sesi::in_world_chart(sys_, x_);
+    const sesi::State<Chart>& x = shown();
+    if (x.framed() || x.clustered) {
+      const auto world = sesi::in_world_chart(sys_, x);
       q = world.q;
       p = world.p;
     } else {
-      q = x_.q;
-      p = x_.p;
+      q = x.q;
+      p = x.p;
     }
   }
 
  private:
+  /// The state the outputs and diagnostics see: x_, or for a processed method the state its
+  /// kernel's variables stand for (post-processed on a copy once per state, kept until the next
+  /// step or restore).
+  const sesi::State<Chart>& shown() const {
+    if (!stepper_->processed()) return x_;
+    if (!shown_valid_) {
+      stepper_->output(x_, shown_);
+      shown_valid_ = true;
+    }
+    return shown_;
+  }
+  static bool same_state(const sesi::State<Chart>& a, const sesi::State<Chart>& b) {
+    const auto same = [](const auto& u, const auto& v) {
+      return u.rows() == v.rows() && u.cols() == v.cols() && u == v;
+    };
+    if (!same(a.q, b.q) || !same(a.p, b.p) || a.frames.size() != b.frames.size() || a.clustered != b.clustered) {
+      return false;
+    }
+    for (std::size_t i = 0; i < a.frames.size(); ++i) {
+      if (!same(a.frames[i], b.frames[i])) return false;
+    }
+    return !a.clustered || same(a.cluster, b.cluster);
+  }
+
   /// H^n: the bodies go into a cluster frame (docs/charts.md) at the scene's first force centre,
   /// or else at the bodies' centre; at the origin it is the identity (nothing changes until
   /// the cluster drifts 2 R away and re-centres). Far out, each body is re-read from its world
@@ -140,6 +187,12 @@ class ChartIntegrator final : public Integrator {
   sesi::State<Chart> x_;
   std::unique_ptr<AnyStepper<SystemOf<Chart>>> stepper_;  // refers to sys_
   typename SystemOf<Chart>::Workspace w_ = sys_.make_workspace();  // the diagnostics' own
+  // Processed methods (AnyStepper::processed): the step of the kernel's variables in
+  // framed_state (the scene's), the initial state, and the post-processed state (shown()).
+  double dt_ = 0.0;
+  sesi::State<Chart> initial_;
+  mutable sesi::State<Chart> shown_;
+  mutable bool shown_valid_ = false;
 };
 
 /// The integrator on Space<N> for the N in Dims equal to scene.dim(), or nullptr.

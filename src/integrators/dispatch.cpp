@@ -1,9 +1,30 @@
 #include "dispatch.hpp"
 
+#include <string>
+
+#include "errors.hpp"
+#include "methods.hpp"
+
 namespace sesi::program {
 
 std::unique_ptr<Integrator> make_integrator(const Scene& scene) {
   const bool low = scene.dim() <= 4;
+  if (is_embedded_method(scene.integrator.method)) {
+    switch (scene.space.kind) {
+      case SpaceKind::sphere:
+        return sphere_geodesic_integrator(scene);
+      case SpaceKind::hyperbolic:
+        return hyperbolic_geodesic_integrator(scene);
+      case SpaceKind::euclidean:
+        break;
+    }
+    // On E^n the geodesic splitting is the chart methods' drift-kick splitting in Cartesian
+    // coordinates: the sesi methods are already it.
+    throw InputError("method '" + scene.integrator.method + "' runs on curved spaces only (sphere, hyperbolic), and " +
+                     scene.source + " is on the euclidean space E^" + std::to_string(scene.dim()) +
+                     "; there the sesi methods are the same splitting ('" +
+                     std::string(scene.integrator.method).replace(0, 8, "sesi") + "')");
+  }
   switch (scene.space.kind) {
     case SpaceKind::sphere:
       return low ? sphere_integrator_1_4(scene) : sphere_integrator_5_up(scene);
@@ -13,6 +34,24 @@ std::unique_ptr<Integrator> make_integrator(const Scene& scene) {
       break;
   }
   return low ? euclidean_integrator_1_4(scene) : euclidean_integrator_5_up(scene);
+}
+
+std::unique_ptr<Integrator> make_integrator(const Scene& scene, const Integrator& from) {
+  FramedState state = from.framed_state();
+  if (state.embedded == is_embedded_method(scene.integrator.method)) {
+    std::unique_ptr<Integrator> next = make_integrator(scene);
+    next->restore(state);
+    return next;
+  }
+  // A chart state and an embedded state: through the scene's chart, as the initial state.
+  Scene at = scene;
+  Eigen::MatrixXd q, p;
+  from.read(q, p);
+  for (int b = 0; b < at.body_count(); ++b) {
+    at.bodies[static_cast<std::size_t>(b)].q = q.col(b);
+    at.bodies[static_cast<std::size_t>(b)].p = p.col(b);
+  }
+  return make_integrator(at);
 }
 
 }  // namespace sesi::program

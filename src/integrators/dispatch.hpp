@@ -3,8 +3,9 @@
 /// From the scene's runtime space and dimension to a compile-time chart, once per run:
 /// S^n, H^n and E^n with fixed-size Eigen types for n = 1..8 (max_fixed_dim), Eigen::Dynamic
 /// above. Each (space, dimension) instantiates one ChartIntegrator: one System type (terms.hpp)
-/// and one composition engine serving every method (methods.hpp). The instantiations are
-/// spread over the dispatch_*.cpp files so that they compile in parallel.
+/// and one composition engine serving every method (methods.hpp); on S^n and H^n also one
+/// EmbeddedIntegrator serving every geodesic method. The instantiations are spread over the
+/// dispatch_*.cpp files so that they compile in parallel.
 
 #include <memory>
 
@@ -22,5 +23,8 @@ std::unique_ptr<Integrator> hyperbolic_integrator_1_4(const Scene&);
 std::unique_ptr<Integrator> hyperbolic_integrator_5_up(const Scene&);
 std::unique_ptr<Integrator> euclidean_integrator_1_4(const Scene&);
 std::unique_ptr<Integrator> euclidean_integrator_5_up(const Scene&);
+// The geodesic methods (EmbeddedIntegrator), every dimension (dispatch_geodesic_<space>.cpp).
+std::unique_ptr<Integrator> sphere_geodesic_integrator(const Scene&);
+std::unique_ptr<Integrator> hyperbolic_geodesic_integrator(const Scene&);
 
 }  // namespace sesi::program

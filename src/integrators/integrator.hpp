@@ -13,14 +13,19 @@
 
 namespace sesi::program {
 
-/// What is stepped, exactly as the integrator holds it: chart coordinates and momenta of every
-/// body in its own chart frame, and the frames (empty: every body in the scene's chart). This,
-/// not a chart conversion, is what a checkpoint saves and a resumed run restores.
+/// What is stepped, exactly as the integrator holds it. This, not a conversion, is what a
+/// checkpoint saves and a resumed run restores. Two kinds:
+///  - a chart method's (embedded = false): chart coordinates and momenta q, p of every body in
+///    its own chart frame, and the frames (empty: every body in the scene's chart);
+///  - a geodesic method's (embedded = true; EmbeddedIntegrator): the embedding points x and
+///    velocities v in world coordinates; q, p, frames and cluster are empty.
 struct FramedState {
   Eigen::MatrixXd q, p;                ///< dim x bodies
   std::vector<Eigen::MatrixXd> frames;  ///< one ambient x ambient isometry per body, or none
   bool clustered = false;               ///< H^n: the bodies' frames are relative to `cluster`
   Eigen::MatrixXd cluster;              ///< the cluster frame (sesi::State::cluster), if clustered
+  bool embedded = false;                ///< a geodesic method's state: x and v below
+  Eigen::MatrixXd x, v;                 ///< ambient x bodies, if embedded
 };
 
 class Integrator {
@@ -50,7 +55,8 @@ class Integrator {
   virtual Eigen::MatrixXd local_points() = 0;
   virtual Eigen::VectorXd to_local(const Eigen::VectorXd& world) const = 0;
   /// The state as stepped, and its restoration (a checkpoint's; the run goes on bit for bit as
-  /// if it had not stopped: the stepper's caches are recomputed from it alike).
+  /// if it had not stopped: the stepper's caches are recomputed from it alike). restore takes a
+  /// state of its own kind only (FramedState::embedded; make_integrator(scene, from) converts).
   virtual FramedState framed_state() const = 0;
   virtual void restore(const FramedState& state) = 0;
   /// With a non-finite energy: the first body (1-based) whose kinetic energy or potential
@@ -59,7 +65,14 @@ class Integrator {
 };
 
 /// The integrator of scene (its space, dimension, bodies, potentials and method), at the
-/// scene's initial state.
+/// scene's initial state: a ChartIntegrator (chart_integrator.hpp) for the sesi methods, an
+/// EmbeddedIntegrator (embedded_integrator.hpp) for the geodesic methods (S^n and H^n only: on
+/// E^n they are refused with an InputError naming the method and the space).
 std::unique_ptr<Integrator> make_integrator(const Scene& scene);
+
+/// The integrator of scene's method at the current state of `from`, an integrator of the same
+/// scene with maybe another method (sesi.Simulation.method): from's framed state when both hold
+/// the same kind, else from's state read in the scene's chart (read()) as the initial state.
+std::unique_ptr<Integrator> make_integrator(const Scene& scene, const Integrator& from);
 
 }  // namespace sesi::program

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "errors.hpp"
+#include "methods.hpp"
 #include "signals.hpp"
 
 namespace sesi::program {
@@ -248,12 +249,17 @@ std::string body_text(const Checkpoint& c) {
   out.key("trajectory_format").str(trajectory_format_name(in.trajectory_format));
   out.key("guard").num(c.guard_energy).num(c.guard_scale);
   out.key("step").integer(c.step);
-  out.key("q").matrix(c.state.q);
-  out.key("p").matrix(c.state.p);
-  out.key("frames").integer(static_cast<long long>(c.state.frames.size()));
-  for (const Eigen::MatrixXd& f : c.state.frames) out.matrix(f);
-  out.key("cluster").integer(c.state.clustered ? 1 : 0);
-  if (c.state.clustered) out.matrix(c.state.cluster);
+  if (c.state.embedded) {  // version 2: a geodesic method's state
+    out.key("x").matrix(c.state.x);
+    out.key("v").matrix(c.state.v);
+  } else {  // version 1: a chart method's
+    out.key("q").matrix(c.state.q);
+    out.key("p").matrix(c.state.p);
+    out.key("frames").integer(static_cast<long long>(c.state.frames.size()));
+    for (const Eigen::MatrixXd& f : c.state.frames) out.matrix(f);
+    out.key("cluster").integer(c.state.clustered ? 1 : 0);
+    if (c.state.clustered) out.matrix(c.state.cluster);
+  }
   out.key("outputs")
       .integer(static_cast<long long>(c.outputs.trajectory_bytes))
       .integer(static_cast<long long>(c.outputs.diagnostics_bytes))
@@ -274,7 +280,7 @@ std::string body_text(const Checkpoint& c) {
   return text;
 }
 
-Checkpoint parse_body(std::string_view text) {
+Checkpoint parse_body(std::string_view text, int version) {
   In in(text);
   Checkpoint c;
   Scene& scene = c.scene;
@@ -340,17 +346,25 @@ Checkpoint parse_body(std::string_view text) {
   c.guard_scale = in.num();
   in.key("step");
   c.step = static_cast<long>(in.integer(0));
-  in.key("q");
-  c.state.q = in.matrix(dim, bodies);
-  in.key("p");
-  c.state.p = in.matrix(dim, bodies);
-  in.key("frames");
-  const long long frames = in.integer(0, bodies);
-  if (frames != 0 && frames != bodies) throw Corrupt{"the frames do not match the bodies"};
-  for (long long k = 0; k < frames; ++k) c.state.frames.push_back(in.matrix(ambient, ambient));
-  in.key("cluster");
-  c.state.clustered = in.integer(0, 1) == 1;
-  if (c.state.clustered) c.state.cluster = in.matrix(ambient, ambient);
+  if (version == Checkpoint::chart_version) {
+    in.key("q");
+    c.state.q = in.matrix(dim, bodies);
+    in.key("p");
+    c.state.p = in.matrix(dim, bodies);
+    in.key("frames");
+    const long long frames = in.integer(0, bodies);
+    if (frames != 0 && frames != bodies) throw Corrupt{"the frames do not match the bodies"};
+    for (long long k = 0; k < frames; ++k) c.state.frames.push_back(in.matrix(ambient, ambient));
+    in.key("cluster");
+    c.state.clustered = in.integer(0, 1) == 1;
+    if (c.state.clustered) c.state.cluster = in.matrix(ambient, ambient);
+  } else {
+    c.state.embedded = true;
+    in.key("x");
+    c.state.x = in.matrix(ambient, bodies);
+    in.key("v");
+    c.state.v = in.matrix(ambient, bodies);
+  }
   for (Body& b : scene.bodies) {  // the initial conditions are not needed: the state is
     b.q = Eigen::VectorXd::Zero(dim);
     b.p = Eigen::VectorXd::Zero(dim);
@@ -404,7 +418,7 @@ void write_checkpoint(const Checkpoint& c, const std::filesystem::path& dir, con
   const std::string body = body_text(c);
   char header[128];
   std::snprintf(header, sizeof header, "%.*s %d %zu %016llx\n", static_cast<int>(magic.size()), magic.data(),
-                Checkpoint::version, body.size(), static_cast<unsigned long long>(fnv1a(body)));
+                c.file_version(), body.size(), static_cast<unsigned long long>(fnv1a(body)));
   const std::filesystem::path path = dir / checkpoint_file_name;
   const std::filesystem::path temporary = dir / (std::string(checkpoint_file_name) + ".tmp");
   // A second signal while this is written removes the unfinished file (signals.hpp).
@@ -455,9 +469,9 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
       eol == std::string::npos) {
     throw refuse("the checkpoint's first line is malformed");
   }
-  if (version != Checkpoint::version) {
-    throw refuse("checkpoint format version " + std::to_string(version) + "; this sesi reads version " +
-                 std::to_string(Checkpoint::version));
+  if (version != Checkpoint::chart_version && version != Checkpoint::version) {
+    throw refuse("checkpoint format version " + std::to_string(version) + "; this sesi reads versions " +
+                 std::to_string(Checkpoint::chart_version) + " and " + std::to_string(Checkpoint::version));
   }
   const std::string_view body = std::string_view(text).substr(eol + 1);
   if (body.size() != length) {
@@ -465,11 +479,23 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
                  "first line, expected " + std::to_string(length) + ")");
   }
   if (fnv1a(body) != sum) throw refuse("the checkpoint is corrupted (checksum mismatch)");
+  Checkpoint c;
   try {
-    return parse_body(body);
+    c = parse_body(body, version);
   } catch (const Corrupt& e) {
     throw refuse("the checkpoint is inconsistent: " + e.what);
   }
+  // A chart method steps q and p, a geodesic method x and v: the one cannot go on from the
+  // other's state (an unknown method is check_method's to report).
+  const std::string& method = c.scene.integrator.method;
+  if (is_method(method) && is_embedded_method(method) != c.state.embedded) {
+    throw refuse(c.state.embedded
+                     ? "the checkpoint holds a geodesic method's state (x, v), but its method '" + method +
+                           "' is a chart method, which steps q and p"
+                     : "the checkpoint holds a chart method's state (q, p), but its method '" + method +
+                           "' is a geodesic method, which steps x and v");
+  }
+  return c;
 }
 
 }  // namespace sesi::program

@@ -274,7 +274,9 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
       outcome.reason = StopReason::non_finite;
       outcome.failed_body = bad_body;
       const FramedState state = integrator.framed_state();  // where the value went bad
-      outcome.detail = non_finite_detail(state.q, state.p, bad_body, s.energy);
+      outcome.detail = state.embedded
+                           ? non_finite_detail(state.x, state.v, bad_body, s.energy, "embedding point", "velocity")
+                           : non_finite_detail(state.q, state.p, bad_body, s.energy);
     } else if (outcome.reason == StopReason::completed && check) {
       // The close-encounter floor, then the energy guard (an encounter also spoils the energy).
       s.x = integrator.points();

@@ -11,7 +11,8 @@ bool has_nan(const Eigen::Ref<const Eigen::VectorXd>& v) { return v.array().isNa
 
 }  // namespace
 
-std::string non_finite_detail(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p, int body, double energy) {
+std::string non_finite_detail(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p, int body, double energy,
+                              const char* q_name, const char* p_name) {
   const std::string detail = "the state became non-finite";
   const std::string overflow = " overflowed to +-inf (beyond the largest double, 1.8e308)";
   const std::string nan = " became NaN (not a number)";
@@ -20,10 +21,10 @@ std::string non_finite_detail(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p
   if (k >= 0 && k < q.cols() && k < p.cols()) {
     // An infinity first: the NaN that often comes with it in the same step (inf - inf, 0 * inf)
     // is its consequence, and the cause to report is the overflow.
-    if (has_inf(q.col(k))) return detail + ": " + who + "coordinates" + overflow;
-    if (has_inf(p.col(k))) return detail + ": " + who + "momenta" + overflow;
-    if (has_nan(q.col(k))) return detail + ": " + who + "coordinates" + nan;
-    if (has_nan(p.col(k))) return detail + ": " + who + "momenta" + nan;
+    if (has_inf(q.col(k))) return detail + ": " + who + q_name + overflow;
+    if (has_inf(p.col(k))) return detail + ": " + who + p_name + overflow;
+    if (has_nan(q.col(k))) return detail + ": " + who + q_name + nan;
+    if (has_nan(p.col(k))) return detail + ": " + who + p_name + nan;
   }
   const std::string at = body > 0 ? " (at body " + std::to_string(body) + ")" : "";
   if (std::isinf(energy)) return detail + ": the energy" + overflow + at;

@@ -55,7 +55,10 @@ struct RunControl {
 /// (the total energy that was not finite, and body the one whose term was). Overflow and NaN have
 /// different causes (a step or a force too large for double, against 0/0 at a singular point), so
 /// the message tells them apart (issue #12: "the messages for overflow say overflow").
-std::string non_finite_detail(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p, int body, double energy);
+/// q and p are called `coordinates` and `momenta` (a chart state) unless named otherwise (a
+/// geodesic method's embedding points and velocities).
+std::string non_finite_detail(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p, int body, double energy,
+                              const char* q_name = "coordinates", const char* p_name = "momenta");
 
 /// "completed", "non-finite state", "invariant failed", "interrupted", "energy error exceeded",
 /// "close encounter".

@@ -6,6 +6,8 @@
 /// `make<Sys>(sys)`, which returns a stepper for the system behind a virtual call (AnyStepper).
 /// The composition methods all share one engine per system (sesi::Composition over
 /// coefficients::Runtime, the table's weights as data), so adding a table costs no compile time.
+/// The processed methods (ProcessedMethod) share a second one (sesi::Processed over runtime
+/// weights, include/sesi/processed.hpp), whose stepped state is the kernel's variables.
 /// On S^n and H^n the engine re-charts bodies near their chart's singular set between steps
 /// (sesi::Recharting, docs/charts.md), so scenes may cross poles and go far out. A reference stepper (e.g.
 /// dopri5, gauss4, rattle from include/sesi/reference/) is registered by adding a descriptor
@@ -23,6 +25,7 @@
 #include <vector>
 
 #include <sesi/coefficients.hpp>
+#include <sesi/processed.hpp>
 #include <sesi/recharting.hpp>
 #include <sesi/stepper.hpp>
 
@@ -36,6 +39,24 @@ class AnyStepper {
   virtual ~AnyStepper() = default;
   /// Advance x from t to t + dt.
   virtual void step(StateType& x, double t, double dt) = 0;
+
+  // Processed methods (ProcessedStepper, sesi::Processed): x is then the kernel's variables z
+  // once the first step has entered them, and the state is output(x). The defaults are the other
+  // methods', whose x is the state.
+
+  /// Whether x is the kernel's variables of a processed method (false: x is the state).
+  virtual bool processed() const { return false; }
+  /// The state x stands for: P^{-1}(x) for the step x was entered with (x itself if not entered).
+  virtual void output(const StateType& x, StateType& y) { y = x; }
+  /// The step x was entered with (0: not entered; x is the state).
+  virtual double entered_step() const { return 0.0; }
+  /// x holds the kernel's variables for step dt (dt = 0: the state itself, not entered).
+  virtual void assume_entered(double dt) { static_cast<void>(dt); }
+  /// out = the kernel's variables of the same state for step dt: P_dt(P^{-1}(x)).
+  virtual void reentered(const StateType& x, double dt, StateType& out) {
+    static_cast<void>(dt);
+    out = x;
+  }
 };
 
 /// An odeint-style stepper (do_step(sys, x, t, dt)) held with its system.
@@ -88,6 +109,58 @@ class CompositionStepper final : public AnyStepper<Sys> {
   ProgramComposition<typename Sys::Chart> engine_;
 };
 
+/// The processed engine of the program for a chart (sesi::Processed over runtime weights, one type
+/// for every processed table): on S^n and H^n in kick-drift-kick form with re-charting between
+/// kernel steps, leaving and re-entering the kernel's variables around each re-charting
+/// (sesi::RechartingProcessed), like ProgramComposition.
+template <class Chart>
+using ProgramProcessed =
+    std::conditional_t<sesi::Rechartable<Chart>, sesi::RechartingProcessed<coefficients::Runtime, Chart>,
+                       sesi::Processed<coefficients::Runtime, Chart>>;
+
+/// A processed method for Sys over the processed table Table (include/sesi/processed.hpp).
+template <class Sys>
+class ProcessedStepper final : public AnyStepper<Sys> {
+  using Chart = typename Sys::Chart;
+
+ public:
+  using StateType = typename Sys::StateType;
+  template <class Table>
+  static std::unique_ptr<AnyStepper<Sys>> make(const Sys& sys) {
+    if constexpr (sesi::Rechartable<Chart>) {
+      using Base = sesi::Processed<coefficients::Runtime, Chart, sesi::Splitting::kick_drift_kick>;
+      return std::make_unique<ProcessedStepper>(
+          sys, ProgramProcessed<Chart>(sesi::RechartPolicy<typename Chart::Scalar>{},
+                                       Base::template of<Table>()));
+    } else {
+      return std::make_unique<ProcessedStepper>(sys, ProgramProcessed<Chart>::template of<Table>());
+    }
+  }
+  ProcessedStepper(const Sys& sys, ProgramProcessed<Chart> engine) : sys_(sys), engine_(std::move(engine)) {}
+
+  void step(StateType& x, double t, double dt) override { engine_.do_step(std::cref(sys_), x, t, dt); }
+  bool processed() const override { return true; }
+  void output(const StateType& x, StateType& y) override { engine_.post_process(std::cref(sys_), x, y); }
+  double entered_step() const override { return engine_.entered() ? engine_.entered_step() : 0.0; }
+  void assume_entered(double dt) override {
+    if (dt == 0.0) {
+      engine_.restart();
+    } else {
+      engine_.resume(dt);
+    }
+  }
+  void reentered(const StateType& x, double dt, StateType& out) override {
+    out = x;
+    if (engine_.entered() && engine_.entered_step() == dt) return;
+    if (engine_.entered()) engine_.apply_inverse_processor(std::cref(sys_), out, engine_.entered_step());
+    engine_.apply_processor(std::cref(sys_), out, dt);
+  }
+
+ private:
+  const Sys& sys_;
+  ProgramProcessed<Chart> engine_;
+};
+
 /// A string usable as a template argument (for descriptions in the registry).
 template <std::size_t N>
 struct Text {
@@ -111,6 +184,20 @@ struct CompositionMethod {
   }
 };
 
+/// A processed method (include/sesi/processed.hpp): the kernel of the processed table Table is
+/// stepped, its processor applied where the state is read (ChartIntegrator::shown).
+template <class Table, Text About>
+struct ProcessedMethod {
+  static constexpr std::string_view name = Table::name;
+  static constexpr int order = Table::order;  // the effective order
+  static constexpr int stages = Table::kernel::stages;  // force evaluations per step (the kernel's)
+  static constexpr std::string_view about = About.view();
+  template <class Sys>
+  static std::unique_ptr<AnyStepper<Sys>> make(const Sys& sys) {
+    return ProcessedStepper<Sys>::template make<Table>(sys);
+  }
+};
+
 template <class... Method>
 struct MethodList {};
 
@@ -124,8 +211,42 @@ using Methods = MethodList<
   CompositionMethod<coefficients::Yoshida6,   "Yoshida's solution A (7 stages)">,
   CompositionMethod<coefficients::KahanLi6,   "Kahan and Li's s9odr6a (9 stages)">,
   CompositionMethod<coefficients::McLachlan8, "McLachlan's SS15 (15 stages)">,
-  CompositionMethod<coefficients::KahanLi8,   "Kahan and Li's s17odr8a (17 stages)">>;
+  CompositionMethod<coefficients::KahanLi8,   "Kahan and Li's s17odr8a (17 stages)">,
+  ProcessedMethod<coefficients::Blanes6Processed,
+                  "processed, Blanes 2001 (7 stages; 10 more per output)">,
+  ProcessedMethod<coefficients::BlanesCasasMurua8Processed,
+                  "processed, Blanes-Casas-Murua 2006 (13 stages; 20 more per output)">,
+  ProcessedMethod<coefficients::BlanesCasasMurua10Processed,
+                  "processed, Blanes-Casas-Murua 2006 (23 stages; 24 more per output)">>;
 // clang-format on
+
+/// A geodesic method (S^n and H^n): the embedding splitting of include/sesi/reference/embedding.hpp
+/// (exact geodesic drifts and tangential kicks on ambient points x and velocities v, no chart and
+/// no re-charting) composed with a coefficient table. Stepped by EmbeddedIntegrator
+/// (src/integrators/embedded_integrator.hpp), not by a chart stepper: make_integrator picks it by
+/// is_embedded_method.
+template <class Table, Text Name, Text About>
+struct GeodesicMethod {
+  using table = Table;
+  static constexpr std::string_view name = Name.view();
+  static constexpr int order = Table::order;
+  static constexpr int stages = Table::stages;  // force evaluations per step
+  static constexpr std::string_view about = About.view();
+};
+
+// clang-format off
+/// The geodesic methods, each on the table of the sesi method of the same suffix.
+using EmbeddedMethods = MethodList<
+  GeodesicMethod<coefficients::Strang,     "geodesic2",          "geodesic splitting in the embedding, Strang (S^n, H^n; 1 stage)">,
+  GeodesicMethod<coefficients::Yoshida4,   "geodesic4",          "geodesic splitting, Yoshida's triple jump (3 stages)">,
+  GeodesicMethod<coefficients::Yoshida6,   "geodesic6",          "geodesic splitting, Yoshida's solution A (7 stages)">,
+  GeodesicMethod<coefficients::KahanLi6,   "geodesic6-kahan-li", "geodesic splitting, Kahan and Li's s9odr6a (9 stages)">,
+  GeodesicMethod<coefficients::McLachlan8, "geodesic8",          "geodesic splitting, McLachlan's SS15 (15 stages)">,
+  GeodesicMethod<coefficients::KahanLi8,   "geodesic8-kahan-li", "geodesic splitting, Kahan and Li's s17odr8a (17 stages)">>;
+// clang-format on
+
+/// Is name a geodesic method (EmbeddedMethods)?
+bool is_embedded_method(std::string_view name);
 
 /// What --help and the scene checks need to know of a method.
 struct MethodInfo {

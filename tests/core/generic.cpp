@@ -215,3 +215,16 @@ TEST_CASE("generic: a user chart with its own trig cache runs in the engine") {
   CHECK(std::max((generic.q - reference.q).cwiseAbs().maxCoeff(), (generic.p - reference.p).cwiseAbs().maxCoeff()) <=
         bound);
 }
+
+TEST_CASE("generic: State::set_body fills one column per body") {
+  using Chart = sesi::Sphere<2, double>;
+  sesi::State<Chart> x(2, 2), y(2, 2);
+  x.set_body(0, {1.2, 0.0}, {0.0, 0.4});
+  x.set_body(1, Eigen::Vector2d(1.9, 0.1), Eigen::Vector2d(0.3, -0.4));
+  y.q << 1.2, 1.9,  // the row-wise comma initializer: coordinate 0 of every body first
+      0.0, 0.1;
+  y.p << 0.0, 0.3,
+      0.4, -0.4;
+  CHECK(x.q == y.q);
+  CHECK(x.p == y.p);
+}

@@ -20,8 +20,9 @@ def two_bodies(**integrator):
 def test_catalogues_name_every_method_and_potential():
     names = [m["name"] for m in sesi.methods()]
     assert names == ["sesi2", "sesi4", "sesi4-suzuki", "sesi4-mclachlan", "sesi6", "sesi6-kahan-li", "sesi8",
-                     "sesi8-kahan-li"]
-    assert [m["order"] for m in sesi.methods()] == [2, 4, 4, 4, 6, 6, 8, 8]
+                     "sesi8-kahan-li", "sesi6-processed", "sesi8-processed", "sesi10-processed", "geodesic2",
+                     "geodesic4", "geodesic6", "geodesic6-kahan-li", "geodesic8", "geodesic8-kahan-li"]
+    assert [m["order"] for m in sesi.methods()] == [2, 4, 4, 4, 6, 6, 8, 8, 6, 8, 10, 2, 4, 6, 6, 8, 8]
     kinds = {p["kind"]: p for p in sesi.potentials()}
     assert set(kinds) == {"chord-well", "cotangent-gravity", "central-cotangent", "harmonic-pair", "lennard-jones"}
     assert kinds["lennard-jones"]["keys"] == ["epsilon", "sigma", "cutoff", "min_distance"]

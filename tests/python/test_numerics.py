@@ -35,9 +35,12 @@ def test_every_method_has_its_order(method):
     # and the observed order is near its limit. The methods are symmetric, so the next term of
     # the error is dt^(order + 2) and log2(e(dt) / e(dt/2)) approaches the order at the rate dt^2;
     # McLachlan's SS15 (sesi8) has a large next term: 8.57 at dt = 0.25, 7.80 at 0.1 (round-off).
-    dt = {2: 0.05, 4: 0.1, 6: 0.2, 8: 0.25}[order]
-    t_end = 10.0
+    dt = {2: 0.05, 4: 0.1, 6: 0.2, 8: 0.25, 10: 0.25}[order]
+    # Order 10 (sesi10-processed): at t = 10 its error at dt/2 is 9e-13, too near the floor, and
+    # at dt = 0.4 not yet asymptotic (12.6); at t = 100 it is 2.9e-12 and the observed order 10.03.
+    t_end = 100.0 if order == 10 else 10.0
     coarse, fine = error_at(method, dt, t_end), error_at(method, dt / 2, t_end)
-    assert fine > 1e-11, f"{method}: error {fine} too close to round-off to measure the order"
+    floor = 1e-12 if order == 10 else 1e-11
+    assert fine > floor, f"{method}: error {fine} too close to round-off to measure the order"
     observed = np.log2(coarse / fine)
     assert order - 0.3 < observed < order + 0.7, f"{method}: observed order {observed:.2f}, nominal {order}"

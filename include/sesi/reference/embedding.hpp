@@ -28,6 +28,8 @@
 #include <cmath>
 #include <cstddef>
 #include <type_traits>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -302,10 +304,14 @@ class RattleComposition : public detail::EmbeddingBase<Chart> {
 ///  kick(h): v <- v + h P_x(a), a = -eta dV/dx / m, P_x u = u - (<u,x>/<x,x>) x the projection
 ///    on the tangent space (Minkowski on H^n).
 /// Each step ends with a round-off retraction (x rescaled to <x,x> = s R^2, v made tangent).
+/// With Table = coefficients::Runtime the weights are given at run time (as sesi::Composition:
+/// one engine for every table, stepping bit for bit as the fixed table's; the program's
+/// geodesic methods).
 template <class Table, QuadricChart Chart, Splitting Form = Splitting::drift_kick_drift>
 class GeodesicComposition : public detail::EmbeddingBase<Chart> {
   using Base = detail::EmbeddingBase<Chart>;
   using Q = typename Base::Q;
+  static constexpr bool runtime_table = std::is_same_v<Table, coefficients::Runtime>;
 
  public:
   using typename Base::Matrix;
@@ -314,22 +320,40 @@ class GeodesicComposition : public detail::EmbeddingBase<Chart> {
   using typename Base::state_type;
   using typename Base::time_type;
   using table = Table;
+  using weights_type =
+      std::conditional_t<runtime_table, std::vector<Scalar>, std::array<Scalar, Table::stages>>;
 
+  /// The table's order (0 for a runtime table: ask order()).
   static constexpr order_type order_value = Table::order;
-  static constexpr order_type order() { return Table::order; }
-
-  GeodesicComposition() : w_(Table::template weights<Scalar>()) {
-    if constexpr (Chart::ambient_dimension != Eigen::Dynamic) {  // copies stay defined
-      x_.setZero();
-      a_.setZero();
+  constexpr order_type order() const {
+    if constexpr (runtime_table) {
+      return order_;
+    } else {
+      return Table::order;
     }
   }
+
+  GeodesicComposition() requires(!runtime_table) : w_(Table::template weights<Scalar>()) { clear(); }
+  /// A runtime table: palindromic weights summing to 1, of the given order.
+  GeodesicComposition(std::vector<Scalar> weights, order_type order) requires runtime_table
+      : w_(std::move(weights)), order_(order) {
+    SESI_CHECK(!w_.empty(), "a composition needs at least one stage");
+    clear();
+  }
+  /// A runtime-table composition with the weights and order of a fixed table T.
+  template <class T>
+  static GeodesicComposition of() requires runtime_table {
+    const auto w = T::template weights<Scalar>();
+    return GeodesicComposition(std::vector<Scalar>(w.begin(), w.end()), T::order);
+  }
+  std::size_t stages() const { return w_.size(); }
+  const weights_type& weights() const { return w_; }
 
   template <class Sys>
   void do_step(Sys&& system, state_type& s, time_type /*t*/, time_type dt) {
     using Raw = std::remove_cvref_t<Sys>;
     const auto& sys = sesi::detail::unwrap<Raw>::get(system);
-    const std::size_t n = Table::stages;
+    const std::size_t n = w_.size();
     Scalar pending = w_[0] * dt / Scalar(2);  // half flow carried over to the next stage
     for (std::size_t k = 0; k < n; ++k) {
       const Scalar h = w_[k] * dt;
@@ -354,6 +378,12 @@ class GeodesicComposition : public detail::EmbeddingBase<Chart> {
   }
 
  private:
+  void clear() {
+    if constexpr (Chart::ambient_dimension != Eigen::Dynamic) {  // copies stay defined
+      x_.setZero();
+      a_.setZero();
+    }
+  }
   void drift(const Chart& chart, state_type& s, Scalar h) {
     using std::cos;
     using std::cosh;
@@ -390,7 +420,8 @@ class GeodesicComposition : public detail::EmbeddingBase<Chart> {
     }
   }
 
-  std::array<Scalar, Table::stages> w_;
+  weights_type w_;
+  order_type order_ = Table::order;
   typename Chart::Ambient x_, a_;
 };
 

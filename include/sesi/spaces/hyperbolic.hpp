@@ -115,7 +115,11 @@ class Hyperbolic {
   void embed(const TrigType& t, Ambient& x) const {
     x.resize(ambient_dim());
     x[dim_] = radius_ * t.c[0];
-    detail::unit_sphere_embed(t, 1, dim_, radius_ * t.s[0], x);
+    if constexpr (N == 1) {
+      x[0] = radius_ * t.s[0];  // u_0 = (1); spelled out for GCC 12 (a false -Warray-bounds)
+    } else {
+      detail::unit_sphere_embed(t, 1, dim_, radius_ * t.s[0], x);
+    }
     // Invariant <x,x> = -R^2, to round-off relative to x_{n+1}^2 (which grows like e^{2 q_1}).
     SESI_CHECK(abs_of(constraint(x)) <= invariant_tolerance() * x[dim_] * x[dim_],
                "embedding left the hyperboloid: <x,x> != -R^2");
