@@ -190,6 +190,12 @@ PYBIND11_MODULE(_sesi, m) {
       .def_property_readonly("radius", [](const Simulation& s) { return s.scene().space.radius; })
       .def_property_readonly("name", [](const Simulation& s) { return s.scene().name; })
       .def_property_readonly("method", [](const Simulation& s) { return s.scene().integrator.method; })
+      // method = "auto": why it picked `method` and `dt` (None for a named method).
+      .def_property_readonly("auto_reason", [](const Simulation& s) -> py::object {
+        const auto& a = s.scene().integrator.auto_choice;
+        if (!a) return py::none();
+        return py::str(a->reason);
+      })
       .def_property_readonly("dt", [](const Simulation& s) -> py::object {
         if (!s.scene().integrator.dt) return py::none();
         return py::float_(*s.scene().integrator.dt);

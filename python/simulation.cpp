@@ -8,6 +8,7 @@
 #include <pybind11/eigen.h>
 #include <sesi/parallel.hpp>
 
+#include "auto_method.hpp"
 #include "errors.hpp"
 #include "recorder.hpp"  // momentum_names
 #include "run_sink.hpp"
@@ -91,11 +92,13 @@ Simulation::Simulation(const toml::table& doc, const std::string& source,
     scene_.potentials.emplace_back(program::FunctionExternalSpec{std::move(f)});
     has_functions_ = true;
   }
+  program::resolve_auto(scene_);  // method = "auto": pilot runs, then the method and step
   rebuild();
   start_ = program::guard_reference(scene_, *integrator_);
 }
 
 Simulation::Simulation(program::Scene scene) : scene_(std::move(scene)) {
+  program::resolve_auto(scene_);
   rebuild();
   start_ = program::guard_reference(scene_, *integrator_);
 }
@@ -131,6 +134,11 @@ std::vector<std::string> Simulation::momentum_names() const {
 }
 
 void Simulation::set_method(const std::string& method) {
+  if (method == "auto") {
+    throw program::InputError(option, "method",
+                              "\"auto\" is chosen once, from a scene with [integrator] method = \"auto\", "
+                              "tolerance and t_end (Simulation.from_toml or from_dict); name a method here");
+  }
   program::check_method(method, option, "method");
   const std::string before = scene_.integrator.method;
   scene_.integrator.method = method;

@@ -6,8 +6,8 @@
 
 Reads horizons.csv (one row per method, horizon and level: the least wall time of any run of the
 method's sweep at that horizon reaching max energy error <= level) and draws wall seconds
-against the horizon, log-log, one panel per level, one line per method: the sesi compositions
-solid, rk78 and dopri5 dashed, any other method dotted; a level a method does not reach at a
+against the horizon, log-log, one panel per level, one line per method: the methods of `sesi run`
+(sesi*, geodesic*) solid, rk78 and dopri5 dashed, any other method dotted; a level a method does not reach at a
 horizon leaves a gap. With --markdown, prints the table of docs/benchmarks.md: per horizon and
 level the fastest sesi method against rk78's and dopri5's fastest, with the ratios (their time
 over the sesi method's; '-' where the reference reached no run at that level).
@@ -45,7 +45,8 @@ def read(path):
 
 
 def is_sesi(method):
-    return method.startswith("sesi")
+    """A method of `sesi run`: the chart methods and the geodesic (embedding) ones."""
+    return method.startswith(("sesi", "geodesic"))
 
 
 def style(method):

@@ -82,7 +82,13 @@ std::vector<Scalar> inverse_processor(const Weights& g) {
 /// state. do_step on a state not entered pre-processes it first, and post_process of a state not
 /// entered is a copy, so x is always read through post_process. A state saved in the kernel's
 /// variables (a checkpoint) is taken up again with resume(dt).
-template <class Table, HierarchicalChart Chart, Splitting Form = Splitting::drift_kick_drift>
+///
+/// Engine is the composition engine of the kernel and the processor: sesi::Composition (the
+/// seed's base step in chart coordinates), or any engine with its template signature, its
+/// (weights, order) constructor and do_step, e.g. the embedding's geodesic splitting
+/// (sesi::reference::GeodesicProcessed, reference/embedding.hpp).
+template <class Table, HierarchicalChart Chart, Splitting Form = Splitting::drift_kick_drift,
+          template <class, class, Splitting> class Engine = Composition>
 class Processed {
   static constexpr bool runtime_table = std::is_same_v<Table, coefficients::Runtime>;
   static_assert(runtime_table || ProcessedTable<Table>,
@@ -91,16 +97,16 @@ class Processed {
 
  public:
   using Scalar = typename Chart::Scalar;
-  using state_type = State<Chart>;
-  using deriv_type = State<Chart>;
+  /// The kernel's engine: a Composition over the kernel table (or runtime weights).
+  using kernel_type = Engine<typename detail::kernel_table<Table>::type, Chart, Form>;
+  /// The processor's engine (P and P^{-1}).
+  using processor_type = Engine<coefficients::Runtime, Chart, Form>;
+  using state_type = typename kernel_type::state_type;
+  using deriv_type = state_type;
   using value_type = Scalar;
   using time_type = Scalar;
   using order_type = unsigned short;
   using table = Table;
-  /// The kernel's engine: a Composition over the kernel table (or runtime weights).
-  using kernel_type = Composition<typename detail::kernel_table<Table>::type, Chart, Form>;
-  /// The processor's engine (P and P^{-1}).
-  using processor_type = Composition<coefficients::Runtime, Chart, Form>;
 
   /// The effective order (0 for a runtime table: ask order()).
   static constexpr order_type order_value = Table::order;

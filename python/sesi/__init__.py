@@ -210,6 +210,9 @@ class Simulation:
                        doc="Threads for forces and diagnostics (0: all cores); results do not depend on it.")
     check_every = property(None, lambda self, value: self._setting("check_every", value),
                            doc="Steps between the checks (energy guard, close encounters).")
+    auto_reason = property(lambda self: self._start().auto_reason,
+                           doc="With method \"auto\" (and tolerance and t_end in the scene): why the method "
+                               "and step were picked, as `sesi run` picks them; None otherwise.")
 
     # ---- state -------------------------------------------------------------------------------
 

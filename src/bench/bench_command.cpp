@@ -16,6 +16,7 @@
 #include "bench_scenes.hpp"
 #include "bench_types.hpp"
 #include "errors.hpp"
+#include "methods.hpp"
 #include "scene_reader.hpp"
 
 namespace sesi::program {
@@ -24,7 +25,7 @@ namespace bench {
 
 namespace {
 // clang-format off
-constexpr std::array<MethodSpec, 20> methods{{
+constexpr std::array<MethodSpec, 29> methods{{
   {Method::sesi2,             "sesi2",             2, Family::chart},
   {Method::sesi4,             "sesi4",             4, Family::chart},
   {Method::sesi4_suzuki,      "sesi4-suzuki",      4, Family::chart},
@@ -33,6 +34,9 @@ constexpr std::array<MethodSpec, 20> methods{{
   {Method::sesi6_kahan_li,    "sesi6-kahan-li",    6, Family::chart},
   {Method::sesi8,             "sesi8",             8, Family::chart},
   {Method::sesi8_kahan_li,    "sesi8-kahan-li",    8, Family::chart},
+  {Method::sesi6_processed,   "sesi6-processed",   6, Family::chart},
+  {Method::sesi8_processed,   "sesi8-processed",   8, Family::chart},
+  {Method::sesi10_processed,  "sesi10-processed", 10, Family::chart},
   {Method::dopri5,            "dopri5",            5, Family::adaptive},
   {Method::rk78,              "rk78",              8, Family::adaptive},
   {Method::bulirsch_stoer,    "bulirsch-stoer",    0, Family::adaptive},
@@ -45,6 +49,12 @@ constexpr std::array<MethodSpec, 20> methods{{
   {Method::geodesic2,         "geodesic2",         2, Family::embedding},
   {Method::geodesic4,         "geodesic4",         4, Family::embedding},
   {Method::geodesic6,         "geodesic6",         6, Family::embedding},
+  {Method::geodesic6_kahan_li, "geodesic6-kahan-li", 6, Family::embedding},
+  {Method::geodesic8,         "geodesic8",         8, Family::embedding},
+  {Method::geodesic8_kahan_li, "geodesic8-kahan-li", 8, Family::embedding},
+  {Method::geodesic6_processed, "geodesic6-processed", 6, Family::embedding},
+  {Method::geodesic8_processed, "geodesic8-processed", 8, Family::embedding},
+  {Method::geodesic10_processed, "geodesic10-processed", 10, Family::embedding},
 }};
 // clang-format on
 
@@ -96,18 +106,20 @@ double Ladder::param(int k) const { return std::pow(10.0, -double(k) / per_decad
 Ladder horizon_ladder(const MethodSpec& m) {
   Ladder l;
   if (m.family == Family::adaptive) {
-    // Tolerances 1e-1 .. 1e-15 (abs = rel), from 1e-6.
-    l.per_decade = 2;
-    l.k_start = 12;
-    l.k_min = 2;
-    l.k_max = 30;
+    // Tolerances 1e-1 .. 1e-15 (abs = rel) in rungs of 10^(-1/4), from 1e-6.
+    l.per_decade = 4;
+    l.k_start = 24;
+    l.k_min = 4;
+    l.k_max = 60;
     return l;
   }
-  // Steps 1 .. 1e-5 in rungs of 10^(-1/(2p)), from 0.1 (order 2), 0.2 (4), 0.5 (6 and up):
+  // Steps 1 .. 1e-5 in rungs of 10^(-1/(4p)), from 0.1 (order 2), 0.2 (4), 0.5 (6 and up):
   // on unit-scale scenes (periods of a few time units) just above the largest default level.
+  // A rung moves the error (~ dt^p) by a quarter decade, the cost by 10^(1/(4p)) (1.075 at
+  // order 8): the least time to a level is overstated by at most that.
   const int p = std::max(m.order, 2);
   const double start = p <= 2 ? 0.1 : p <= 4 ? 0.2 : 0.5;
-  l.per_decade = 2 * p;
+  l.per_decade = 4 * p;
   l.k_start = static_cast<int>(std::lround(-l.per_decade * std::log10(start)));
   l.k_min = 0;
   l.k_max = 5 * l.per_decade;
@@ -191,8 +203,8 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
       "With --horizons: DIR/horizons.csv, one row per method, horizon and level: method, order,\n"
       "horizon, level, reached (yes/no), dt_or_tol, steps, force_evals, wall_seconds (of the\n"
       "fastest run reaching max energy error <= level), max_energy_error (of that run), runs,\n"
-      "best_error (smallest of any run); DIR/horizon_runs.csv every run. Default methods: the\n"
-      "sesi compositions, dopri5 and rk78. Plot: /usr/bin/python3 tools/plot_horizons.py\n"
+      "best_error (smallest of any run); DIR/horizon_runs.csv every run. Default methods:\n"
+      "every method of sesi run, dopri5 and rk78. Plot: /usr/bin/python3 tools/plot_horizons.py\n"
       "DIR/horizons.csv --figure PNG.\n"
       "With --scaling: DIR/scaling.csv (default DIR sesi-out/bench/scaling), one row per point:\n"
       "n_bodies, space, dim, potential, method, threads, seconds_per_step, pairs_per_step,\n"
@@ -436,7 +448,7 @@ void write_horizons(const std::string& dir, const std::string& scene, const benc
   if (!out.flush()) throw std::runtime_error("write error on " + path);
 }
 
-/// The summary on stdout: per horizon and level, the fastest sesi composition against rk78's
+/// The summary on stdout: per horizon and level, the fastest method of `sesi run` against rk78's
 /// and dopri5's fastest; on the seed's scene, issue #15's targets.
 void print_horizon_summary(const std::string& scene, const bench::Settings& s,
                            const std::vector<Reach>& table) {
@@ -448,7 +460,7 @@ void print_horizon_summary(const std::string& scene, const bench::Settings& s,
   auto fastest_sesi = [&](double horizon, double level) -> const Reach* {
     const Reach* best = nullptr;
     for (const Reach& c : table)
-      if (c.method->family == bench::Family::chart && c.horizon == horizon && c.level == level &&
+      if (is_method(c.method->name) && c.horizon == horizon && c.level == level &&
           c.run && (!best || c.run->wall_seconds < best->run->wall_seconds))
         best = &c;
     return best;
@@ -547,11 +559,11 @@ int bench_command(const BenchOptions& o) {
     s.levels = parse_numbers(o.levels.empty() ? "1e-5,1e-6,1e-7,1e-8,1e-9,1e-10" : o.levels,
                              "--levels", "a positive energy error level");
   }
-  // The horizon sweep's default methods: the sesi compositions and the two odeint methods the
-  // targets name (the others: --methods).
+  // The horizon sweep's default methods: every method of `sesi run` (compositions, processed and
+  // geodesic methods) and the two odeint methods the targets name (the others: --methods).
   if (!s.horizons.empty() && (o.methods.empty() || o.methods == "all")) {
     for (const bench::MethodSpec& m : bench::all_methods())
-      if (m.family == bench::Family::chart || m.name == "dopri5" || m.name == "rk78" || o.methods == "all")
+      if (is_method(m.name) || m.name == "dopri5" || m.name == "rk78" || o.methods == "all")
         s.methods.push_back(&m);
   } else {
     s.methods = parse_methods(o.methods);

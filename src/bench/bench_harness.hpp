@@ -33,6 +33,7 @@
 
 #include <sesi/coefficients.hpp>
 #include <sesi/diagnostics.hpp>
+#include <sesi/processed.hpp>
 #include <sesi/recharting.hpp>
 #include <sesi/reference/embedding.hpp>
 #include <sesi/reference/implicit.hpp>
@@ -88,6 +89,11 @@ class Harness {
       case Method::sesi6_kahan_li: return composition<co::KahanLi6>(param, times, obs);
       case Method::sesi8: return composition<co::McLachlan8>(param, times, obs);
       case Method::sesi8_kahan_li: return composition<co::KahanLi8>(param, times, obs);
+      case Method::sesi6_processed: return processed<co::Blanes6Processed>(param, times, obs);
+      case Method::sesi8_processed:
+        return processed<co::BlanesCasasMurua8Processed>(param, times, obs);
+      case Method::sesi10_processed:
+        return processed<co::BlanesCasasMurua10Processed>(param, times, obs);
       case Method::dopri5:
         return odeint_result(
             sesi::odeint::integrate_dopri5(sys_, x0_, 0.0, s_.t_end, tolerance(param), times, obs));
@@ -127,6 +133,21 @@ class Harness {
       case Method::geodesic6:
         return embedding<sesi::reference::GeodesicComposition<co::Yoshida6, Chart>>(param, times,
                                                                                     obs);
+      case Method::geodesic6_kahan_li:
+        return embedding<sesi::reference::GeodesicComposition<co::KahanLi6, Chart>>(param, times,
+                                                                                    obs);
+      case Method::geodesic8:
+        return embedding<sesi::reference::GeodesicComposition<co::McLachlan8, Chart>>(param, times,
+                                                                                     obs);
+      case Method::geodesic8_kahan_li:
+        return embedding<sesi::reference::GeodesicComposition<co::KahanLi8, Chart>>(param, times,
+                                                                                   obs);
+      case Method::geodesic6_processed:
+        return embedding_processed<co::Blanes6Processed>(param, times, obs);
+      case Method::geodesic8_processed:
+        return embedding_processed<co::BlanesCasasMurua8Processed>(param, times, obs);
+      case Method::geodesic10_processed:
+        return embedding_processed<co::BlanesCasasMurua10Processed>(param, times, obs);
     }
     throw std::logic_error("unknown method");
   }
@@ -343,11 +364,17 @@ class Harness {
       double best = std::numeric_limits<double>::infinity();
       int stale = 0;
       for (const Row& row : rows) best = std::min(best, row.max_energy_error);
+      // Until a run succeeds (the start may be past a scene's stability limit, e.g. a close
+      // pericentre), failures go finer for up to one decade of the step; after that, three rungs
+      // without a smaller error end the walk.
+      int failed = 0;
       for (int k = ladder.k_start + 1; best > smallest && k <= ladder.k_max; ++k) {
         if (over_budget()) break;
         r = attempt(ladder.param(k));
         const double e = r ? r->max_energy_error : std::numeric_limits<double>::infinity();
-        if (e < 0.9 * best) {
+        if (!std::isfinite(best)) {
+          if (!r && ++failed > ladder.per_decade) break;  // diverges at every step tried
+        } else if (e < 0.9 * best) {
           stale = 0;
         } else if (++stale >= 3) {
           break;  // no gain from finer steps: round-off (or a diverging method)
@@ -460,6 +487,66 @@ class Harness {
         break;
     }
     return {sesi::embedding_points(sys_, x), steps, steps * long(Table::stages)};
+  }
+
+  /// A processed method (sesi/processed.hpp) in the form of the sesi* rows: the state enters the
+  /// kernel's variables once, and every observed state (and the final one) is post-processed, as
+  /// `sesi run` outputs it; each costs the processor's stages, counted in the evaluations.
+  template <class Table, class Obs>
+  Outcome processed(double dt, std::span<const double> times, Obs& obs) const {
+    switch (form_) {
+      case SesiForm::seed: return processed_run(sesi::Processed<Table, Chart>(), dt, times, obs);
+      case SesiForm::program:
+        return processed_run(sesi::Processed<Table, Chart, sesi::Splitting::kick_drift_kick>(), dt,
+                             times, obs);
+      case SesiForm::program_recharting:
+        return processed_run(sesi::RechartingProcessed<Table, Chart>(sesi::RechartPolicy<double>{}),
+                             dt, times, obs);
+    }
+    throw std::logic_error("unknown form");
+  }
+
+  /// A processed geodesic method (reference::GeodesicProcessed), read as processed() reads.
+  template <class Table, class Obs>
+  Outcome embedding_processed(double dt, std::span<const double> times, Obs& obs) const {
+    if constexpr (quadric) {
+      return processed_run(sesi::reference::GeodesicProcessed<Table, Chart>(),
+                           sesi::reference::to_embedded(sys_, x0_), dt, times, obs);
+    } else {
+      throw std::logic_error("embedding methods need S^n or H^n");
+    }
+  }
+
+  template <class Stepper, class Obs>
+  Outcome processed_run(Stepper st, double dt, std::span<const double> times, Obs& obs) const {
+    return processed_run(std::move(st), x0_, dt, times, obs);
+  }
+
+  /// The processed run from x0 (a chart or an embedded state): enter, step, read through
+  /// post_process, leave.
+  template <class Stepper, class State0, class Obs>
+  Outcome processed_run(Stepper st, const State0& x0, double dt, std::span<const double> times, Obs& obs) const {
+    using Table = typename Stepper::table;
+    using S = typename Stepper::state_type;
+    S x = x0, y = x0;
+    long reads = 0;
+    auto read = [&](const S& z, double t) {
+      st.post_process(sys_, z, y);
+      ++reads;
+      obs(static_cast<const S&>(y), t);
+    };
+    st.pre_process(sys_, x, dt);
+    const long steps = long(sesi::reference::integrate_fixed(st, sys_, x, 0.0, s_.t_end, dt, times, read));
+    st.leave(sys_, x);
+    long entries = 2 + reads;  // P once, P^{-1} at the end and at each read
+    if constexpr (requires { st.reentries(); }) entries += 2 * st.reentries();
+    Eigen::MatrixXd points;
+    if constexpr (std::is_same_v<S, StateT>) {
+      points = sesi::embedding_points(sys_, x);
+    } else {
+      points = x.x;
+    }
+    return {points, steps, steps * long(Table::kernel::stages) + entries * long(Table::processor_stages)};
   }
 
   template <class Stepper, class Obs, class Evals>

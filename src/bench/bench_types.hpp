@@ -13,8 +13,10 @@ namespace sesi::program::bench {
 
 enum class Method {
   sesi2, sesi4, sesi4_suzuki, sesi4_mclachlan, sesi6, sesi6_kahan_li, sesi8, sesi8_kahan_li,
-  dopri5, rk78, bulirsch_stoer, rk4, implicit_midpoint, gauss4, tao2, tao4, rattle, geodesic2,
-  geodesic4, geodesic6
+  sesi6_processed, sesi8_processed, sesi10_processed, dopri5, rk78, bulirsch_stoer, rk4,
+  implicit_midpoint, gauss4, tao2, tao4, rattle, geodesic2, geodesic4, geodesic6,
+  geodesic6_kahan_li, geodesic8, geodesic8_kahan_li, geodesic6_processed, geodesic8_processed,
+  geodesic10_processed
 };
 
 enum class Family { chart, adaptive, fixed_reference, embedding };
@@ -103,8 +105,8 @@ struct Result {
 std::vector<double> sweep(const MethodSpec& m, const Settings& s);
 
 /// The default steps (tolerances) of the horizon sweep: param(k) = 10^(-k / per_decade) for
-/// integers k in [k_min, k_max], started at k_start. Fixed steps of order p take 2p rungs per
-/// decade (the energy error ~ dt^p then moves by about half a decade per rung); tolerances 2.
+/// integers k in [k_min, k_max], started at k_start. Fixed steps of order p take 4p rungs per
+/// decade (the energy error ~ dt^p then moves by about a quarter decade per rung); tolerances 4.
 struct Ladder {
   int per_decade = 2;
   int k_start = 0, k_min = 0, k_max = 0;

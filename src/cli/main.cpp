@@ -10,6 +10,7 @@
 #include "methods.hpp"
 #include "run_command.hpp"
 #include "signals.hpp"
+#include "sweep_command.hpp"
 
 namespace {
 
@@ -24,6 +25,10 @@ std::string run_footer() {
     text += line;
   }
   text +=
+      "  auto               with tolerance (--tolerance): the method and step from pilot runs of the\n"
+      "                     scene and the bench's cost model, for a target max relative energy\n"
+      "                     error; summary.json says what it picked and why (docs/scheme.md)\n";
+  text +=
       "  geodesic*: S^n and H^n only (refused on E^n); the state is the embedding points x and\n"
       "    velocities v, no chart. On H^n they lose digits like eps e^(2r/R) at distance r from the\n"
       "    origin (a far pair's separation: 6e-7 off at 10 radii, 3e-4 at 13, where sesi4 is 2e-9\n"
@@ -36,8 +41,8 @@ std::string run_footer() {
       "  [[potential]]  kind = \"chord-well\" (theta0, strength), \"cotangent-gravity\" (G),\n"
       "                 \"central-cotangent\" (k, center), \"harmonic-pair\" (k, d0),\n"
       "                 \"lennard-jones\" (epsilon, sigma, cutoff); singular terms also min_distance\n"
-      "  [integrator]   method, dt, t_end, output_every, energy_guard, threads, check_every,\n"
-      "                 checkpoint_every, neighbour_skin, trajectory_format\n"
+      "  [integrator]   method, tolerance (method auto), dt, t_end, output_every, energy_guard,\n"
+      "                 threads, check_every, checkpoint_every, neighbour_skin, trajectory_format\n"
       "  Without SCENE: the seed paper's three bodies on S^2 with sesi4, dt = 0.1, t_end = 800.\n"
       "\nOUTPUTS (in DIR, put in place when the run ends; docs/scene-format.md says what is kept):\n"
       "  trajectory.csv   t, then per body b: b<b>_q<i>, b<b>_p<i>, b<b>_x<i>\n"
@@ -70,7 +75,8 @@ int main(int argc, char** argv) {
                "sesi"};
   app.set_version_flag("--version", "sesi 0.1.0");
   app.require_subcommand(1);
-  app.footer("\nRun 'sesi run --help' for scenes, methods, outputs and exit statuses.");
+  app.footer("\nRun 'sesi run --help' for scenes, methods, outputs and exit statuses; 'sesi sweep --help'\n"
+             "for many variants of a scene at once, on all cores or MPI ranks (docs/sweeps.md).");
 
   RunOptions options;
   std::string method;
@@ -85,8 +91,15 @@ int main(int argc, char** argv) {
   run->add_option("--out,-o", options.out, "Output directory (default ./sesi-out/<scene name>).")
       ->type_name("DIR");
   auto* method_opt =
-      run->add_option("--method,-m", method, "Integration method (see METHODS); replaces the scene's.")
+      run->add_option("--method,-m", method,
+                      "Integration method (see METHODS), or auto; replaces the scene's.")
           ->type_name("M");
+  double tolerance = 0.0;
+  auto* tolerance_opt =
+      run->add_option("--tolerance", tolerance,
+                      "Target max relative energy error, 1e-12 to 1e-2: method auto picks the method and "
+                      "step (implies --method auto; a given dt is replaced).")
+          ->type_name("TOL");
   auto* dt_opt = run->add_option("--dt", dt, "Time step, finite and non-zero (negative runs backwards).")
                      ->type_name("H");
   auto* t_end_opt = run->add_option("--t-end", t_end,
@@ -130,6 +143,8 @@ int main(int argc, char** argv) {
   resume->add_flag("--quiet,-q", resume_options.quiet, "No report on stdout and no progress bar.");
   BenchOptions bench_options;
   CLI::App* bench = add_bench_subcommand(app, bench_options);
+  SweepOptions sweep_options;
+  CLI::App* sweep = add_sweep_subcommand(app, sweep_options);
 
   try {
     app.parse(argc, argv);
@@ -139,6 +154,7 @@ int main(int argc, char** argv) {
     return exit_bad_input;
   }
   if (method_opt->count() > 0) options.method = method;
+  if (tolerance_opt->count() > 0) options.tolerance = tolerance;
   if (dt_opt->count() > 0) options.dt = dt;
   if (t_end_opt->count() > 0) options.t_end = t_end;
   if (every_opt->count() > 0) options.output_every = output_every;
@@ -152,6 +168,7 @@ int main(int argc, char** argv) {
 
   try {
     if (bench->parsed()) return bench_command(bench_options);
+    if (sweep->parsed()) return sweep_command(sweep_options);
     if (resume->parsed()) return resume_command(resume_options);
     return run_command(options);
   } catch (const InputError& e) {

@@ -6,6 +6,7 @@
 
 #include <sesi/parallel.hpp>
 
+#include "auto_method.hpp"
 #include "checkpoint.hpp"
 #include "errors.hpp"
 #include "integrator.hpp"
@@ -27,8 +28,17 @@ void apply_overrides(Scene& scene, const RunOptions& options) {
   const Origin option{};
   IntegratorSpec& in = scene.integrator;
   if (options.method) {
-    check_method(*options.method, option, "--method");
+    check_method_or_auto(*options.method, option, "--method");
     in.method = *options.method;
+  }
+  if (options.tolerance) {  // --tolerance alone means --method auto
+    check_tolerance(*options.tolerance, option, "--tolerance");
+    if (options.method && *options.method != "auto") {
+      throw InputError(option, "--tolerance", "only with --method auto (the method and step are then chosen "
+                                              "to meet it), not with --method " + *options.method);
+    }
+    in.method = "auto";
+    in.tolerance = options.tolerance;
   }
   if (options.dt) {
     check_dt(*options.dt, option, "--dt");
@@ -62,12 +72,29 @@ void apply_overrides(Scene& scene, const RunOptions& options) {
     in.trajectory_format = parse_trajectory_format(*options.trajectory_format, option, "--trajectory-format");
   }
   const Origin file{scene.source, in.line};
-  if (!in.dt) throw InputError(file, "integrator.dt", "missing required key (give it in [integrator] or with --dt)");
+  if (in.method == "auto") {
+    if (!in.tolerance) {
+      throw InputError(file, "integrator.tolerance",
+                       "method \"auto\" needs a tolerance, the target max relative energy error (give it in "
+                       "[integrator] or with --tolerance)");
+    }
+  } else if (in.tolerance) {
+    throw InputError(file, "integrator.tolerance",
+                     "only with method = \"auto\" (the method and step are then chosen to meet it); the "
+                     "method is " + in.method);
+  }
+  if (!in.dt && in.method != "auto") {
+    throw InputError(file, "integrator.dt", "missing required key (give it in [integrator] or with --dt)");
+  }
   if (!in.t_end) {
     throw InputError(file, "integrator.t_end", "missing required key (give it in [integrator] or with --t-end)");
   }
-  check_step_count(*in.t_end, *in.dt, options.dt || options.t_end ? option : file,
-                   options.dt || options.t_end ? "--dt/--t-end" : "integrator");
+  if (in.dt) {
+    check_step_count(*in.t_end, *in.dt, options.dt || options.t_end ? option : file,
+                     options.dt || options.t_end ? "--dt/--t-end" : "integrator");
+  }
+  resolve_auto(scene);  // method auto: pilot runs, then the method and step (nothing written)
+  check_step_count(*in.t_end, *in.dt, file, "integrator");
 }
 
 std::string describe_space(const SpaceSpec& space) {
@@ -83,6 +110,9 @@ void print_report(const Scene& scene, const Recorder& recorder, const RunOutcome
               describe_space(scene.space).c_str(), scene.body_count(), scene.integrator.method.c_str(),
               format_number(*scene.integrator.dt).c_str(), outcome.steps_done,
               format_number(*scene.integrator.t_end).c_str(), wall);
+  if (const auto& a = scene.integrator.auto_choice) {
+    std::printf("  method auto (tolerance %s): %s\n", format_number(a->tolerance).c_str(), a->reason.c_str());
+  }
   std::printf("  energy %.17g, max |error| %.3e (relative %.3e)\n", inv.energy_initial,
               inv.max_abs_energy_error, inv.max_rel_energy_error);
   std::printf("  momentum map: max |drift| %.3e\n", inv.max_momentum_drift);
@@ -130,6 +160,15 @@ int execute(const Scene& scene, StagingDir& staging, bool quiet, const Checkpoin
       checkpoint_step < 0 ? std::string()
                           : "; resume from its checkpoint (step " + std::to_string(checkpoint_step) +
                                 ") with: sesi resume " + dir.string();
+  if (const auto& a = scene.integrator.auto_choice;
+      a && recorder->invariants().max_rel_energy_error > 10 * a->tolerance) {
+    std::fprintf(stderr,
+                 "sesi: warning: %s: method auto: the run's max relative energy error %s is more than 10x the "
+                 "tolerance %s (its pilot runs of %s time units did not meet what the run met); choose a smaller "
+                 "tolerance, or a method and dt\n",
+                 scene.name.c_str(), format_short(recorder->invariants().max_rel_energy_error).c_str(),
+                 format_number(a->tolerance).c_str(), format_number(a->pilot_t_end).c_str());
+  }
   switch (outcome.reason) {
     case StopReason::completed:
       if (!quiet) print_report(scene, *recorder, outcome, wall, dir);

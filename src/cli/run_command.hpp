@@ -12,7 +12,8 @@ namespace sesi::program {
 struct RunOptions {
   std::string scene_path;  ///< empty: the embedded default (the seed's scene)
   std::string out;         ///< empty: ./sesi-out/<scene name>
-  std::optional<std::string> method;
+  std::optional<std::string> method;  ///< a method name or "auto"
+  std::optional<double> tolerance;    ///< method auto's target max relative energy error
   std::optional<double> dt;
   std::optional<double> t_end;
   std::optional<long> output_every;

@@ -61,18 +61,28 @@ template <class Chart>
 using GeodesicEngine =
     sesi::reference::GeodesicComposition<coefficients::Runtime, Chart, sesi::Splitting::drift_kick_drift>;
 
-/// The engine of the geodesic method called name (a name of EmbeddedMethods).
+/// The engine of the processed geodesic methods (GeodesicProcessedMethod): one type, the
+/// kernel's and the processor's weights as data.
+template <class Chart>
+using GeodesicProcessedEngine = sesi::reference::GeodesicProcessed<coefficients::Runtime, Chart>;
+
+/// The engine of the geodesic method called name (a name of EmbeddedMethods): `plain` or, for a
+/// processed method, `processed` is set.
 template <class Chart, class... Method>
-GeodesicEngine<Chart> geodesic_engine(MethodList<Method...>, std::string_view name) {
-  std::optional<GeodesicEngine<Chart>> out;
+void geodesic_engine(MethodList<Method...>, std::string_view name, std::optional<GeodesicEngine<Chart>>& plain,
+                     std::optional<GeodesicProcessedEngine<Chart>>& processed) {
   const auto try_method = [&]<class M>() {
     if (name != M::name) return false;
-    out.emplace(GeodesicEngine<Chart>::template of<typename M::table>());
+    if constexpr (M::processed) {
+      processed.emplace(GeodesicProcessedEngine<Chart>::template of<typename M::table>());
+    } else {
+      plain.emplace(GeodesicEngine<Chart>::template of<typename M::table>());
+    }
     return true;
   };
-  static_cast<void>((try_method.template operator()<Method>() || ...));
-  if (!out) throw std::logic_error("not a geodesic method: '" + std::string(name) + "'");
-  return std::move(*out);
+  if (!(try_method.template operator()<Method>() || ...)) {
+    throw std::logic_error("not a geodesic method: '" + std::string(name) + "'");
+  }
 }
 
 template <class Chart>
@@ -83,13 +93,24 @@ class EmbeddedIntegrator final : public Integrator {
  public:
   explicit EmbeddedIntegrator(const Scene& scene)
       : sys_(make_system(scene, make_chart<Chart>(scene.space))),
-        e_(sesi::reference::to_embedded(sys_, initial_state<Chart>(scene))),
-        stepper_(geodesic_engine<Chart>(EmbeddedMethods{}, scene.integrator.method)) {}
+        e_(sesi::reference::to_embedded(sys_, initial_state<Chart>(scene))) {
+    geodesic_engine<Chart>(EmbeddedMethods{}, scene.integrator.method, stepper_, processed_);
+    if (processed_) {
+      dt_ = scene.integrator.dt.value_or(0.0);
+      initial_ = e_;
+    }
+  }
   EmbeddedIntegrator(const EmbeddedIntegrator&) = delete;
   EmbeddedIntegrator& operator=(const EmbeddedIntegrator&) = delete;
 
   void step(double t, double h) override {
-    stepper_.do_step(sys_, e_, t, h);
+    if (processed_) {
+      processed_->do_step(sys_, e_, t, h);  // pre-processes first, or re-enters for another h
+      shown_valid_ = false;
+      if (dt_ == 0.0) dt_ = h;  // the step, when the scene has none (Python)
+    } else {
+      stepper_->do_step(sys_, e_, t, h);
+    }
 #if defined(SESI_ENABLE_CHECKS) && SESI_ENABLE_CHECKS
     check_on_quadric();
 #endif
@@ -97,13 +118,14 @@ class EmbeddedIntegrator final : public Integrator {
 
   /// In the scene's chart: q = chart(x) (angles in their principal ranges), p = m J^T eta v.
   void read(Eigen::MatrixXd& q, Eigen::MatrixXd& p) const override {
-    const auto s = sesi::reference::to_chart(sys_, e_);
+    const auto s = sesi::reference::to_chart(sys_, shown());
     q = s.q;
     p = s.p;
   }
   int first_non_finite_body() const override {
-    for (int b = 0; b < e_.bodies(); ++b) {
-      if (!e_.x.col(b).allFinite() || !e_.v.col(b).allFinite()) return b + 1;
+    const EState& e = shown();
+    for (int b = 0; b < e.bodies(); ++b) {
+      if (!e.x.col(b).allFinite() || !e.v.col(b).allFinite()) return b + 1;
     }
     return 0;
   }
@@ -113,37 +135,49 @@ class EmbeddedIntegrator final : public Integrator {
   Eigen::VectorXd momentum_map() override {
     const int a = sys_.ambient_dim();
     Eigen::VectorXd out = Eigen::VectorXd::Zero(a * (a - 1) / 2);
+    const EState& e = shown();
     int k = 0;
     for (int r = 0; r < a; ++r) {
       for (int c = r + 1; c < a; ++c, ++k) {
         for (int b = 0; b < sys_.bodies(); ++b) {
-          out[k] += sys_.mass(b) * (e_.x(r, b) * e_.v(c, b) - e_.v(r, b) * e_.x(c, b));
+          out[k] += sys_.mass(b) * (e.x(r, b) * e.v(c, b) - e.v(r, b) * e.x(c, b));
         }
       }
     }
     return out;
   }
-  Eigen::MatrixXd points() override { return e_.x; }
-  Eigen::MatrixXd velocities() override { return e_.v; }
+  Eigen::MatrixXd points() override { return shown().x; }
+  Eigen::MatrixXd velocities() override { return shown().v; }
   bool clustered() const override { return false; }
-  Eigen::MatrixXd local_points() override { return e_.x; }
+  Eigen::MatrixXd local_points() override { return shown().x; }
   Eigen::VectorXd to_local(const Eigen::VectorXd& world) const override { return world; }
   int body_with_non_finite_energy() override {
+    const EState& e = shown();
     for (int b = 0; b < sys_.bodies(); ++b) {
-      if (!std::isfinite(sys_.mass(b) * Q::dot(e_.v.col(b), e_.v.col(b)))) return b + 1;
+      if (!std::isfinite(sys_.mass(b) * Q::dot(e.v.col(b), e.v.col(b)))) return b + 1;
     }
-    w_.X = e_.x;
+    w_.X = e.x;
     sys_.ambient_gradient(w_);
     for (int b = 0; b < sys_.bodies(); ++b) {
       if (!w_.G.col(b).allFinite()) return b + 1;
     }
     return 0;
   }
+  /// A processed method's state is the kernel's variables for the scene's step, before the first
+  /// step the state itself (as ChartIntegrator's; one entered with another step, after a
+  /// shortened last step, is moved to the scene's step on a copy): restore takes them up again.
   FramedState framed_state() const override {
     FramedState out;
     out.embedded = true;
     out.x = e_.x;
     out.v = e_.v;
+    if (processed_ && processed_->entered() && processed_->entered_step() != dt_) {
+      EState moved = e_;
+      processed_->apply_inverse_processor(sys_, moved, processed_->entered_step());
+      processed_->apply_processor(sys_, moved, dt_);
+      out.x = moved.x;
+      out.v = moved.v;
+    }
     return out;
   }
   void restore(const FramedState& state) override {
@@ -156,16 +190,37 @@ class EmbeddedIntegrator final : public Integrator {
     }
     e_.x = state.x;
     e_.v = state.v;
+    if (processed_) {
+      shown_valid_ = false;
+      // (The initial state, e.g. another method's before its first step, is the state itself.)
+      const bool initial = e_.x == initial_.x && e_.v == initial_.v;
+      if (dt_ == 0.0 || initial) {
+        processed_->restart();
+      } else {
+        processed_->resume(dt_);
+      }
+    }
   }
 
  private:
+  /// The state the outputs and diagnostics see: e_, or for a processed method the state its
+  /// kernel's variables stand for (post-processed on a copy once per state).
+  const EState& shown() const {
+    if (!processed_) return e_;
+    if (!shown_valid_) {
+      processed_->post_process(sys_, e_, shown_);
+      shown_valid_ = true;
+    }
+    return shown_;
+  }
   double kinetic_energy() const {
+    const EState& e = shown();
     double k = 0.0;
-    for (int b = 0; b < sys_.bodies(); ++b) k += sys_.mass(b) * Q::dot(e_.v.col(b), e_.v.col(b)) / 2.0;
+    for (int b = 0; b < sys_.bodies(); ++b) k += sys_.mass(b) * Q::dot(e.v.col(b), e.v.col(b)) / 2.0;
     return k;
   }
   double potential_energy() {
-    w_.X = e_.x;
+    w_.X = shown().x;
     return sys_.ambient_potential_energy(w_);
   }
 
@@ -190,8 +245,15 @@ class EmbeddedIntegrator final : public Integrator {
 #endif
 
   SystemOf<Chart> sys_;
-  EState e_;
-  GeodesicEngine<Chart> stepper_;
+  EState e_;  ///< the state, or a processed method's kernel's variables
+  std::optional<GeodesicEngine<Chart>> stepper_;
+  // A processed method: its engine (mutable: post-processing moves its processor's caches, not
+  // the state), the scene's step, the initial state, and the post-processed state.
+  mutable std::optional<GeodesicProcessedEngine<Chart>> processed_;
+  double dt_ = 0.0;
+  EState initial_;
+  mutable EState shown_;
+  mutable bool shown_valid_ = false;
   typename SystemOf<Chart>::Workspace w_ = sys_.make_workspace();  // the diagnostics' own
 };
 

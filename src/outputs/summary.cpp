@@ -47,6 +47,42 @@ double scene_chart_p_error(double distance, double radius) {
   return std::numeric_limits<double>::epsilon() * std::exp(2.0 * distance / radius);
 }
 
+namespace {
+/// What method = "auto" picked and why (run/auto_method.cpp).
+void write_auto(JsonWriter& json, const AutoChoice& a, double max_rel_error) {
+  json.begin_object("auto");
+  json.number("tolerance", a.tolerance);
+  // The run's own max relative energy error over the tolerance: above 10, the pilot runs did not
+  // see what the run met (e.g. a close approach after them); the program then says so on stderr.
+  json.number("error_over_tolerance", max_rel_error / a.tolerance);
+  json.string("reason", a.reason);
+  if (a.given_dt) {
+    json.number("replaced_dt", *a.given_dt);
+    json.integer("replaced_output_every", a.given_output_every);
+  } else {
+    json.null("replaced_dt");
+  }
+  json.number("predicted_max_rel_energy_error", a.predicted_error);
+  json.number("pilot_t_end", a.pilot_t_end);
+  json.integer("pilot_steps", a.pilot_steps);
+  json.number("pilot_seconds", a.pilot_seconds);
+  json.begin_array("candidates");
+  for (const AutoCandidate& c : a.candidates) {
+    json.begin_object();
+    json.string("method", c.method);
+    json.number("pilot_dt", c.pilot_dt);
+    json.number("pilot_max_rel_energy_error", c.pilot_error);
+    json.boolean("second_pilot", c.refined);
+    json.number("dt", c.dt);
+    // steps x stages x stage cost; null: no pilot run of it had an error below 1e-2
+    json.number("predicted_cost", c.cost);
+    json.end_object();
+  }
+  json.end_array();
+  json.end_object();
+}
+}  // namespace
+
 std::string summary_json(const SummaryData& d) {
   const Scene& scene = d.scene;
   const InvariantStats& inv = d.invariants;
@@ -71,6 +107,7 @@ std::string summary_json(const SummaryData& d) {
   json.string("trajectory", scene.integrator.trajectory_format == TrajectoryFormat::h5md ? "trajectory.h5"
                                                                                           : "trajectory.csv");
   json.number("wall_seconds", d.wall_seconds);
+  if (const auto& a = scene.integrator.auto_choice) write_auto(json, *a, inv.max_rel_energy_error);
 
   json.begin_object("energy");
   json.number("initial", inv.energy_initial);

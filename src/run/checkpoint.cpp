@@ -139,6 +139,13 @@ class In {
     const std::vector<double> v = vector(max_size);
     return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
   }
+  /// Whether the next token is k; consumed if so (an optional key).
+  bool optional_key(std::string_view k) {
+    const std::size_t at = pos_;
+    if (token() == k) return true;
+    pos_ = at;
+    return false;
+  }
   bool at_end() {
     skip();
     return pos_ == text_.size();
@@ -247,6 +254,16 @@ std::string body_text(const Checkpoint& c) {
   out.key("checkpoint_every").integer(in.checkpoint_every);
   out.key("neighbour_skin").num(in.neighbour_skin);
   out.key("trajectory_format").str(trajectory_format_name(in.trajectory_format));
+  if (in.auto_choice) {  // method = "auto": what it picked, for the resumed run's summary
+    const AutoChoice& a = *in.auto_choice;
+    out.key("auto").num(a.tolerance).str(a.reason).integer(a.given_dt ? 1 : 0).num(a.given_dt.value_or(0.0));
+    out.integer(a.given_output_every).num(a.pilot_t_end).integer(a.pilot_steps).num(a.pilot_seconds);
+    out.num(a.predicted_error);
+    out.integer(static_cast<long long>(a.candidates.size()));
+    for (const AutoCandidate& c : a.candidates) {
+      out.str(c.method).num(c.pilot_dt).num(c.pilot_error).num(c.dt).num(c.cost).integer(c.refined ? 1 : 0);
+    }
+  }
   out.key("guard").num(c.guard_energy).num(c.guard_scale);
   out.key("step").integer(c.step);
   if (c.state.embedded) {  // version 2: a geodesic method's state
@@ -340,6 +357,32 @@ Checkpoint parse_body(std::string_view text, int version) {
     spec.trajectory_format = TrajectoryFormat::h5md;
   } else {
     throw Corrupt{"unknown trajectory format '" + format + "'"};
+  }
+  if (in.optional_key("auto")) {
+    AutoChoice a;
+    a.tolerance = in.num();
+    a.reason = in.str();
+    const bool given = in.integer(0, 1) == 1;
+    const double given_dt = in.num();
+    if (given) a.given_dt = given_dt;
+    a.given_output_every = static_cast<long>(in.integer(1));
+    a.pilot_t_end = in.num();
+    a.pilot_steps = static_cast<long>(in.integer(0));
+    a.pilot_seconds = in.num();
+    a.predicted_error = in.num();
+    const long long n = in.integer(0, 64);
+    for (long long k = 0; k < n; ++k) {
+      AutoCandidate cand;
+      cand.method = in.str();
+      cand.pilot_dt = in.num();
+      cand.pilot_error = in.num();
+      cand.dt = in.num();
+      cand.cost = in.num();
+      cand.refined = in.integer(0, 1) == 1;
+      a.candidates.push_back(std::move(cand));
+    }
+    spec.tolerance = a.tolerance;
+    spec.auto_choice = std::move(a);
   }
   in.key("guard");
   c.guard_energy = in.num();

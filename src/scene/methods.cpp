@@ -8,7 +8,7 @@ namespace sesi::program {
 namespace {
 template <class... Method>
 constexpr auto catalogue_of(MethodList<Method...>) {
-  return std::array<MethodInfo, sizeof...(Method)>{MethodInfo{Method::name, Method::order, Method::about, Method::stages}...};
+  return std::array<MethodInfo, sizeof...(Method)>{MethodInfo{Method::name, Method::order, Method::about, Method::stages, Method::output_stages}...};
 }
 template <class... Method>
 constexpr auto names_of(MethodList<Method...>) {

@@ -176,6 +176,7 @@ struct CompositionMethod {
   static constexpr std::string_view name = Table::name;
   static constexpr int order = Table::order;
   static constexpr int stages = Table::stages;  // force evaluations per step (kick-drift-kick, FSAL)
+  static constexpr int output_stages = 0;  // force evaluations per state read (none)
   static constexpr std::string_view about = About.view();
   template <class Sys>
   static std::unique_ptr<AnyStepper<Sys>> make(const Sys& sys) {
@@ -191,6 +192,7 @@ struct ProcessedMethod {
   static constexpr std::string_view name = Table::name;
   static constexpr int order = Table::order;  // the effective order
   static constexpr int stages = Table::kernel::stages;  // force evaluations per step (the kernel's)
+  static constexpr int output_stages = Table::processor_stages;  // per state read: P^{-1} on a copy
   static constexpr std::string_view about = About.view();
   template <class Sys>
   static std::unique_ptr<AnyStepper<Sys>> make(const Sys& sys) {
@@ -228,9 +230,25 @@ using Methods = MethodList<
 template <class Table, Text Name, Text About>
 struct GeodesicMethod {
   using table = Table;
+  static constexpr bool processed = false;
   static constexpr std::string_view name = Name.view();
   static constexpr int order = Table::order;
   static constexpr int stages = Table::stages;  // force evaluations per step
+  static constexpr int output_stages = 0;  // force evaluations per state read (none)
+  static constexpr std::string_view about = About.view();
+};
+
+/// A processed geodesic method: the processed table Table (as ProcessedMethod) over the geodesic
+/// splitting (sesi::reference::GeodesicProcessed); the kernel is stepped, the processor applied
+/// where the state is read (EmbeddedIntegrator::shown).
+template <class Table, Text Name, Text About>
+struct GeodesicProcessedMethod {
+  using table = Table;
+  static constexpr bool processed = true;
+  static constexpr std::string_view name = Name.view();
+  static constexpr int order = Table::order;            // the effective order
+  static constexpr int stages = Table::kernel::stages;  // force evaluations per step (the kernel's)
+  static constexpr int output_stages = Table::processor_stages;  // per state read: P^{-1} on a copy
   static constexpr std::string_view about = About.view();
 };
 
@@ -242,7 +260,13 @@ using EmbeddedMethods = MethodList<
   GeodesicMethod<coefficients::Yoshida6,   "geodesic6",          "geodesic splitting, Yoshida's solution A (7 stages)">,
   GeodesicMethod<coefficients::KahanLi6,   "geodesic6-kahan-li", "geodesic splitting, Kahan and Li's s9odr6a (9 stages)">,
   GeodesicMethod<coefficients::McLachlan8, "geodesic8",          "geodesic splitting, McLachlan's SS15 (15 stages)">,
-  GeodesicMethod<coefficients::KahanLi8,   "geodesic8-kahan-li", "geodesic splitting, Kahan and Li's s17odr8a (17 stages)">>;
+  GeodesicMethod<coefficients::KahanLi8,   "geodesic8-kahan-li", "geodesic splitting, Kahan and Li's s17odr8a (17 stages)">,
+  GeodesicProcessedMethod<coefficients::Blanes6Processed,            "geodesic6-processed",
+                          "geodesic splitting, processed, Blanes 2001 (7 stages; 10 more per output)">,
+  GeodesicProcessedMethod<coefficients::BlanesCasasMurua8Processed,  "geodesic8-processed",
+                          "geodesic splitting, processed, Blanes-Casas-Murua 2006 (13 stages; 20 more per output)">,
+  GeodesicProcessedMethod<coefficients::BlanesCasasMurua10Processed, "geodesic10-processed",
+                          "geodesic splitting, processed, Blanes-Casas-Murua 2006 (23 stages; 24 more per output)">>;
 // clang-format on
 
 /// Is name a geodesic method (EmbeddedMethods)?
@@ -254,6 +278,9 @@ struct MethodInfo {
   int order;
   std::string_view about;
   int stages;  ///< force evaluations per step
+  /// Force evaluations per state read between steps (an output row, a check): a processed
+  /// method's post-processing and, after a step of another size, re-entry; 0 for the others.
+  int output_stages;
 };
 
 /// All registered methods, in registration order.

@@ -84,8 +84,37 @@ enum class TrajectoryFormat { csv, h5md };
 /// "csv", "h5md".
 std::string_view trajectory_format_name(TrajectoryFormat format);
 
+/// One method tried by `method = "auto"` (run/auto_method.cpp): its pilot runs and what it
+/// would cost to meet the tolerance.
+struct AutoCandidate {
+  std::string method;
+  double pilot_dt = 0;     ///< the step of its last pilot run (0: none succeeded)
+  double pilot_error = 0;  ///< that run's max relative energy error (inf: it failed)
+  double dt = 0;           ///< the step predicted to meet the tolerance
+  double cost = 0;         ///< predicted cost of the run: steps x stages x stage cost (inf: out)
+  bool refined = false;    ///< had a second pilot run at its predicted step
+};
+
+/// What `method = "auto"` picked, and why (summary.json's "auto"; kept in checkpoints).
+struct AutoChoice {
+  double tolerance = 0;            ///< the target max relative energy error
+  std::optional<double> given_dt;  ///< a step of the scene or of --dt that the choice replaced
+  long given_output_every = 1;
+  double pilot_t_end = 0;          ///< length of each pilot run
+  long pilot_steps = 0;            ///< steps of all pilot runs together
+  double pilot_seconds = 0;        ///< their wall time (the run's own is summary.json's)
+  double predicted_error = 0;      ///< of the chosen method and step
+  std::vector<AutoCandidate> candidates;
+  std::string reason;              ///< one sentence
+};
+
 struct IntegratorSpec {
   std::string method = "sesi4";
+  /// method = "auto": the target max relative energy error (issue #15); empty otherwise.
+  std::optional<double> tolerance;
+  /// method = "auto" once resolved (resolve_auto, run/auto_method.hpp): method and dt are then
+  /// the chosen ones.
+  std::optional<AutoChoice> auto_choice;
   std::optional<double> dt;     ///< required by the time the run starts (file or --dt)
   std::optional<double> t_end;  ///< required by the time the run starts (file or --t-end)
   long output_every = 1;

@@ -574,12 +574,20 @@ class SceneReader {
     static constexpr std::array keys = {"method"sv,       "dt"sv,          "t_end"sv,
                                         "output_every"sv, "energy_guard"sv, "threads"sv,
                                         "check_every"sv,  "trajectory_format"sv, "neighbour_skin"sv,
-                                        "checkpoint_every"sv};
+                                        "checkpoint_every"sv, "tolerance"sv};
     in.allow_only(keys, "[integrator]");
     IntegratorSpec& spec = scene_.integrator;
     if (in.has("method")) {
-      spec.method = in.string("method", "a method name");
-      check_method(spec.method, in.origin_of("method"), in.key_path("method"));
+      spec.method = in.string("method", "a method name or \"auto\"");
+      check_method_or_auto(spec.method, in.origin_of("method"), in.key_path("method"));
+    }
+    if (in.has("tolerance")) {
+      spec.tolerance = in.number("tolerance", "a max relative energy error");
+      check_tolerance(*spec.tolerance, in.origin_of("tolerance"), in.key_path("tolerance"));
+      if (in.has("method") && spec.method != "auto") {
+        in.fail("tolerance", "only with method = \"auto\" (the method and step are then chosen to "
+                             "meet it); method is \"" + spec.method + "\"");
+      }
     }
     if (in.has("dt")) {
       spec.dt = in.number("dt", "a finite, non-zero step");

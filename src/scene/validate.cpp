@@ -20,6 +20,23 @@ void check_method(std::string_view method, const Origin& origin, std::string_vie
                        one_of(method_names()) + ")");
 }
 
+void check_method_or_auto(std::string_view method, const Origin& origin, std::string_view key) {
+  if (method == "auto") return;
+  if (is_method(method)) return;
+  throw InputError(origin, key,
+                   "unknown method '" + std::string(method) + "'" +
+                       did_you_mean(method, method_names()) + " (expected \"auto\" or " +
+                       one_of(method_names()) + ")");
+}
+
+void check_tolerance(double tolerance, const Origin& origin, std::string_view key) {
+  if (!std::isfinite(tolerance) || tolerance < min_tolerance || tolerance > max_tolerance) {
+    throw InputError(origin, key,
+                     "expected a max relative energy error from " + format_number(min_tolerance) +
+                         " to " + format_number(max_tolerance) + ", got " + format_number(tolerance));
+  }
+}
+
 void check_dt(double dt, const Origin& origin, std::string_view key) {
   if (!std::isfinite(dt) || dt == 0.0) {
     throw InputError(origin, key, "expected a finite, non-zero step, got " + format_number(dt));

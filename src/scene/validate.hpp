@@ -15,6 +15,12 @@ namespace sesi::program {
 inline constexpr double max_steps = 1e12;
 
 void check_method(std::string_view method, const Origin& origin, std::string_view key);
+/// A method name or "auto" (method = "auto": the method and step chosen for a tolerance).
+void check_method_or_auto(std::string_view method, const Origin& origin, std::string_view key);
+/// The bounds of `tolerance` (method = "auto"): a max relative energy error from 1e-12 (double's
+/// round-off over a long run) to 1e-2.
+inline constexpr double min_tolerance = 1e-12, max_tolerance = 1e-2;
+void check_tolerance(double tolerance, const Origin& origin, std::string_view key);
 /// dt: finite and non-zero (negative integrates backwards in time).
 void check_dt(double dt, const Origin& origin, std::string_view key);
 /// t_end: finite and >= 0.

@@ -21,8 +21,9 @@ def test_catalogues_name_every_method_and_potential():
     names = [m["name"] for m in sesi.methods()]
     assert names == ["sesi2", "sesi4", "sesi4-suzuki", "sesi4-mclachlan", "sesi6", "sesi6-kahan-li", "sesi8",
                      "sesi8-kahan-li", "sesi6-processed", "sesi8-processed", "sesi10-processed", "geodesic2",
-                     "geodesic4", "geodesic6", "geodesic6-kahan-li", "geodesic8", "geodesic8-kahan-li"]
-    assert [m["order"] for m in sesi.methods()] == [2, 4, 4, 4, 6, 6, 8, 8, 6, 8, 10, 2, 4, 6, 6, 8, 8]
+                     "geodesic4", "geodesic6", "geodesic6-kahan-li", "geodesic8", "geodesic8-kahan-li",
+                     "geodesic6-processed", "geodesic8-processed", "geodesic10-processed"]
+    assert [m["order"] for m in sesi.methods()] == [2, 4, 4, 4, 6, 6, 8, 8, 6, 8, 10, 2, 4, 6, 6, 8, 8, 6, 8, 10]
     kinds = {p["kind"]: p for p in sesi.potentials()}
     assert set(kinds) == {"chord-well", "cotangent-gravity", "central-cotangent", "harmonic-pair", "lennard-jones"}
     assert kinds["lennard-jones"]["keys"] == ["epsilon", "sigma", "cutoff", "min_distance"]
@@ -120,3 +121,20 @@ def test_paper_scene_is_the_programs_default():
     sim = sesi.Simulation.paper()
     assert sim.method == "sesi4" and sim.dt == 0.1 and sim.n_bodies == 3
     np.testing.assert_allclose(sim.x, sesi.paper_exact(0.0)[0], rtol=0, atol=1e-15)
+
+
+def test_method_auto_from_a_scene():
+    """method = "auto" (issue #15) is resolved when the simulation is made from a scene: the same
+    choice as `sesi run`, a method of the catalogue and a step, and the reason."""
+    doc = {"space": {"kind": "sphere", "dim": 2, "radius": 1.0},
+           "bodies": [{"mass": 1.0, "q": [0.8, 0.0], "p": [0.0, 0.7]}],
+           "potential": [{"kind": "central-cotangent", "k": 1.0, "center": [0.0, 0.0, 1.0]}],
+           "integrator": {"method": "auto", "tolerance": 1e-8, "t_end": 20.0}}
+    sim = sesi.Simulation.from_dict(doc)
+    assert sim.method in [m["name"] for m in sesi.methods()]
+    assert sim.dt > 0 and sim.auto_reason.startswith(sim.method)
+    e0 = sim.energy()
+    sim.integrate(20.0)
+    assert abs(sim.energy() - e0) <= 10 * 1e-8 * abs(e0)
+    with pytest.raises(sesi.InputError, match="auto"):
+        sim.method = "auto"

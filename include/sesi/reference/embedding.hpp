@@ -35,6 +35,7 @@
 
 #include "sesi/coefficients.hpp"
 #include "sesi/config.hpp"
+#include "sesi/processed.hpp"
 #include "sesi/spaces/hyperbolic.hpp"
 #include "sesi/spaces/sphere.hpp"
 #include "sesi/special_functions.hpp"
@@ -434,5 +435,13 @@ template <class Chart>
 using Geodesic4 = GeodesicComposition<coefficients::Yoshida4, Chart>;
 template <class Chart>
 using Geodesic6 = GeodesicComposition<coefficients::Yoshida6, Chart>;
+
+/// Processed methods over the geodesic splitting (issue #15): the processed tables of
+/// coefficients.hpp (Blanes 2001, Blanes-Casas-Murua 2006) with the geodesic base step in place
+/// of the chart's. The construction (sesi::Processed, processed.hpp) needs of its base step only
+/// that it be symmetric and of second order, which the geodesic splitting is (HLW V.3.3); the
+/// state stepped is the kernel's variables, read through post_process.
+template <class Table, class Chart>
+using GeodesicProcessed = sesi::Processed<Table, Chart, Splitting::drift_kick_drift, GeodesicComposition>;
 
 }  // namespace sesi::reference

@@ -43,13 +43,13 @@ def processed_final(ctx, scene, method, dt, t_end, tag):
     return s, [c for b in s["final_state"]["bodies"] for c in b["x"] + b["v"]]
 
 
-def processed_orders(ctx, scene, t_end, steps):
+def processed_orders(ctx, scene, t_end, steps, orders=PROCESSED_METHODS):
     """Final world states at h, h/2, h/4 (as method_orders): the observed order of each method
     in steps (method -> h) within 0.3 of 6 and 0.8 of 8 and 10 (as method_orders: that tells
     them from each other and from the kernel's own order 4). The second difference must be far
     above the runs' round-off (at most about 160 steps of 23 stages, 1e-13)."""
     for method, h in steps.items():
-        order = PROCESSED_METHODS[method]
+        order = orders[method]
         finals = [processed_final(ctx, scene, method, step, t_end, f"{method}-{step}")[1] for step in (h, h / 2, h / 4)]
         e1, e2 = math.dist(finals[0], finals[1]), math.dist(finals[1], finals[2])
         check(e2 > 1e-12, f"{method}: difference {e2:.3g} at h = {h / 2} too close to round-off")
@@ -65,6 +65,48 @@ def processed_method_orders(ctx):
     outputs are of order 6, 8, 10. Measured: 6.02 (h = 0.2), 7.97 (h = 0.2; 10.45 at h = 0.4,
     not yet asymptotic), 10.17 (h = 0.25; second differences 2.4e-7, 6.4e-12, 1.7e-12)."""
     processed_orders(ctx, [], 10, {"sesi6-processed": 0.2, "sesi8-processed": 0.2, "sesi10-processed": 0.25})
+
+
+# The processed tables over the geodesic splitting (sesi::reference::GeodesicProcessed).
+GEODESIC_PROCESSED_METHODS = {"geodesic6-processed": 6, "geodesic8-processed": 8, "geodesic10-processed": 10}
+
+
+@case
+def processed_geodesic_orders(ctx):
+    """The processed geodesic methods through the program, as processed_method_orders (seed's
+    scene, t = 10, self-differences at h, h/2, h/4)."""
+    processed_orders(ctx, [], 10, {"geodesic6-processed": 0.2, "geodesic8-processed": 0.2,
+                                   "geodesic10-processed": 0.25}, GEODESIC_PROCESSED_METHODS)
+
+
+@case
+def processed_geodesic_agrees_and_resumes(ctx):
+    """On S^2 across pole crossings and on H^2, each processed geodesic method's final state and
+    energy error agree with sesi8-kahan-li at a small step; a resumed run equals an uninterrupted
+    one byte for byte (the checkpoint holds the kernel's variables x, v), also with a shortened last
+    step; the first output row is the initial state (geodesic4's, not processed). Measured: final
+    states within 6.8e-13 (S^2) and 8.9e-10 (H^2) of sesi8-kahan-li's, max |dE| at most 4.4e-14 and
+    6.5e-12."""
+    for scene, dt, t_end in [("sphere-pole-crossing.toml", 0.01, 20), ("hyperbolic-kepler-xv.toml", 0.002, 5)]:
+        path = [ctx.scene(scene)]
+        _, reference = processed_final(ctx, path, "sesi8-kahan-li", dt, t_end, f"g-{scene}-reference")
+        for method in GEODESIC_PROCESSED_METHODS:
+            s, final = processed_final(ctx, path, method, dt, t_end, f"g-{scene}-{method}")
+            distance, error = math.dist(final, reference), s["energy"]["max_abs_error"]
+            print(f"{scene} {method}: |x, v - reference| {distance:.3e}; max |dE| {error:.3e}")
+            check(distance < PROCESSED_AGREEMENT and error < PROCESSED_AGREEMENT,
+                  f"{scene} {method}: final state {distance:.3g} from sesi8-kahan-li, energy error {error:.3g}")
+    for method in GEODESIC_PROCESSED_METHODS:
+        resume_extends(ctx, [ctx.scene("sphere-pole-crossing.toml"), "--method", method], "2.3", "5", 30)
+        resume_extends(ctx, ["--method", method], "1.05", "3", 4, "--output-every", "3")
+        out = ctx.work / f"first-row-{method}"
+        expect_ok(ctx.run("run", ctx.scene("sphere-two-body-qp.toml"), "--method", method, "--t-end", "0.5",
+                          "--out", out, "-q"), method)
+        plain = ctx.work / "first-row-geodesic4"  # the same embedded initial state, not processed
+        expect_ok(ctx.run("run", ctx.scene("sphere-two-body-qp.toml"), "--method", "geodesic4", "--t-end", "0.5",
+                          "--out", plain, "-q"), "geodesic4")
+        first = (out / "trajectory.csv").read_text().splitlines()[:2]
+        check(first == (plain / "trajectory.csv").read_text().splitlines()[:2], f"{method}: first row {first}")
 
 
 @case
