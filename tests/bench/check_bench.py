@@ -16,9 +16,14 @@ import time
 
 COLUMNS = ["method", "order", "dt_or_tol", "steps", "force_evals", "wall_seconds", "final_error",
            "max_energy_error", "max_momentum_drift"]
+# Round-off of a quick run's final positions (unit scale): a few hundred steps of up to 23
+# stages, each rounding at about eps: 400 * 23 * 2.2e-16 = 2e-12.
+ROUNDOFF = 2e-12
 METHODS = ["sesi2", "sesi4", "sesi4-suzuki", "sesi4-mclachlan", "sesi6", "sesi6-kahan-li", "sesi8",
-           "sesi8-kahan-li", "dopri5", "rk78", "bulirsch-stoer", "rk4", "implicit-midpoint",
-           "gauss4", "tao2", "tao4", "rattle", "geodesic2", "geodesic4", "geodesic6"]
+           "sesi8-kahan-li", "sesi6-processed", "sesi8-processed", "sesi10-processed", "dopri5", "rk78",
+           "bulirsch-stoer", "rk4", "implicit-midpoint", "gauss4", "tao2", "tao4", "rattle", "geodesic2",
+           "geodesic4", "geodesic6", "geodesic6-kahan-li", "geodesic8", "geodesic8-kahan-li",
+           "geodesic6-processed", "geodesic8-processed", "geodesic10-processed"]
 
 
 def main():
@@ -93,7 +98,9 @@ def main():
         if m not in ("dopri5", "rk78", "bulirsch-stoer") and steps != sorted(steps):
             failures.append(f"{m}: steps {steps} do not grow as the step falls")
         errors = [float(r["final_error"]) for r in runs]
-        if not errors[-1] < errors[0]:
+        # Below ROUNDOFF both runs are at round-off (sesi10-processed on the seed's scene at the
+        # quick sweep's dt = 0.1 and 0.05: 4e-14 and 6e-14): they need not fall.
+        if not errors[-1] < errors[0] and errors[0] > ROUNDOFF:
             failures.append(f"{m}: final error {errors} does not fall with the step")
         if float(runs[-1]["force_evals"]) <= 0:
             failures.append(f"{m}: no force evaluations counted")

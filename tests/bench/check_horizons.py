@@ -62,10 +62,14 @@ def main():
             failures.append(f"{' '.join(args)}: exit {r.returncode}, stderr {r.stderr!r}, "
                             f"written: {os.path.exists(bad_out)}")
 
-    # The methods of the program's bench: the sesi compositions are the horizon default.
-    help_text = subprocess.run([a.sesi, "bench", "--help"], capture_output=True, text=True).stdout
-    listed = help_text.split("METHODS:")[1].split("\n")[0].split()
-    methods = [m for m in listed if m.startswith("sesi")] + ["dopri5", "rk78"]
+    # The horizon default: every method of `sesi run` (its METHODS list, but auto) and the two
+    # odeint methods of the targets.
+    run_help = subprocess.run([a.sesi, "run", "--help"], capture_output=True, text=True).stdout
+    section = run_help.split("\nMETHODS")[1].split("\n\n")[0].splitlines()[1:]
+    methods = [line.split()[0] for line in section if line.startswith("  ") and not line.startswith("   ")]
+    methods = [m for m in methods if m != "auto" and not m.endswith("*:")] + ["dopri5", "rk78"]
+    if len(methods) != 22:
+        failures.append(f"sesi run --help lists {len(methods) - 2} methods: {methods}")
 
     out = os.path.join(a.work, "horizons")
     run = bench(["--quick", "--scene", "paper", "--horizons", ",".join(f"{h:g}" for h in HORIZONS),
