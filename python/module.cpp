@@ -17,6 +17,7 @@
 #include "errors.hpp"
 #include "paper_scene.hpp"
 #include "methods.hpp"
+#include "method_list.hpp"
 #include "scene_reader.hpp"
 #include "simulation.hpp"
 
@@ -114,13 +115,20 @@ PYBIND11_MODULE(_sesi, m) {
     }
   });
 
+  // The same list as `sesi run --list-methods --json` (src/scene/method_list.hpp).
   m.def("methods", [] {
     py::list out;
-    for (const auto& info : sesi::program::method_catalogue()) {
+    for (const auto& info : sesi::program::method_entries()) {
       py::dict d;
       d["name"] = std::string(info.name);
       d["order"] = info.order;
+      d["family"] = std::string(info.family);
+      d["processed"] = info.processed;
       d["stages"] = info.stages;
+      d["output_stages"] = info.output_stages;
+      py::list spaces;
+      for (auto space : info.spaces) spaces.append(std::string(space));
+      d["spaces"] = spaces;
       d["about"] = std::string(info.about);
       out.append(d);
     }

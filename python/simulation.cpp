@@ -104,7 +104,8 @@ Simulation::Simulation(program::Scene scene) : scene_(std::move(scene)) {
 }
 
 void Simulation::rebuild() {
-  // At the current state; between a chart method and a geodesic method (whose states are of
+  // At the current state as the outputs show it (a processed method's post-processed state, not
+  // its kernel's variables); between a chart method and a geodesic method (whose states are of
   // different kinds) through the scene's chart.
   integrator_ = integrator_ ? program::make_integrator(scene_, *integrator_) : program::make_integrator(scene_);
 }
@@ -140,6 +141,7 @@ void Simulation::set_method(const std::string& method) {
                               "tolerance and t_end (Simulation.from_toml or from_dict); name a method here");
   }
   program::check_method(method, option, "method");
+  if (method == scene_.integrator.method) return;  // the same method goes on as it was, bit for bit
   const std::string before = scene_.integrator.method;
   scene_.integrator.method = method;
   try {

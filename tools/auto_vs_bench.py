@@ -17,7 +17,6 @@ import argparse
 import csv
 import json
 import pathlib
-import re
 import subprocess
 import sys
 import tempfile
@@ -53,12 +52,9 @@ def main():
     o = ap.parse_args()
     sesi = pathlib.Path(o.sesi).resolve()
     scene = [o.scene] if o.scene else []
-    lines = [line for line in run(sesi, "run", "--help").stdout.split("\nMETHODS")[1].split("\n\n")[0].splitlines()
-             if line.startswith("  ") and not line.startswith("   ")]
-    methods = [line.split()[0] for line in lines]
-    stages = {line.split()[0]: int(re.search(r"\((\d+) stage", line).group(1)) for line in lines
-              if re.search(r"\((\d+) stage", line)}
-    methods = [m for m in methods if m not in ("auto", "sesi2", "geodesic2") and not m.endswith("*:")]
+    listed = json.loads(run(sesi, "run", "--list-methods", "--json").stdout)["methods"]
+    stages = {m["name"]: m["stages"] for m in listed}
+    methods = [m["name"] for m in listed if m["order"] >= 4]
     work = pathlib.Path(tempfile.mkdtemp(prefix="auto-vs-bench-"))
     probe = work / "probe"
     run(sesi, "run", *scene, "--t-end", "0", "--method", "sesi4", "--dt", "1", "--out", probe, "-q")

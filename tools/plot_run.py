@@ -103,6 +103,13 @@ def main():
     figure.tight_layout()
     out = args.out or args.dir / "plot.png"
     figure.savefig(out, dpi=120)
+    # Into the run's manifest (sesi-manifest.txt, docs/scene-format.md): a picture sesi made, which
+    # a run repeated into the directory replaces; pictures not listed there are the user's, and kept.
+    manifest = pathlib.Path(out).parent / "sesi-manifest.txt"
+    if manifest.is_file() and manifest.read_text().startswith("# sesi-manifest 1:"):
+        if pathlib.Path(out).name not in manifest.read_text().splitlines()[1:]:
+            with manifest.open("a") as f:
+                f.write(pathlib.Path(out).name + "\n")
     print(f"plot_run.py: wrote {out}")
     return 0
 

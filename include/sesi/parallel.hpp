@@ -1,17 +1,22 @@
 #pragma once
 /// @file parallel.hpp
-/// Deterministic loops over bodies on threads (OpenMP when the build has it, -fopenmp; serial
-/// otherwise, with the same results).
+/// Deterministic loops over bodies on threads (when the build has OpenMP, -fopenmp, which gives
+/// the default thread count; the threads are sesi's own team, detail::Team), serial otherwise,
+/// with the same results.
 ///
 /// Determinism is by construction, not by luck: every loop body writes only to its own body's
 /// entries, and every sum over bodies is formed afterwards in body order (sum_in_order), so the
 /// partition of bodies among threads never changes a single bit of a result. The thread count
-/// is a setting (set_threads, the program's --threads); loops below min_parallel_bodies stay on
-/// one thread, where starting threads would cost more than they save.
+/// is a setting (set_threads, the program's --threads); a loop takes one thread per
+/// min_parallel_bodies bodies (threads_for), so a scene too small to pay for threads runs on one,
+/// and the team's threads wait passively, so a busy machine costs at most the chunks a
+/// descheduled thread has already taken (issue #24).
 
 #include <algorithm>
+#include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <thread>
 #include <vector>
 
 #if defined(_OPENMP)
@@ -20,9 +25,10 @@
 
 namespace sesi::parallel {
 
-/// Loops over fewer bodies than this run on one thread. Measured on the 2-core development
-/// machine (docs/benchmarks.md, "Threads"): below ~256 bodies a level flow or a pair row costs
-/// less than waking a second thread.
+/// Loops over fewer bodies than this run on one thread, and a loop gets a thread per this many
+/// bodies (threads_for). Measured on the 2-core development machine (docs/benchmarks.md,
+/// "Threads"): below ~256 bodies a level flow or a pair row costs less than waking a second
+/// thread, and a 300-body Lennard-Jones run was slower on two threads than on one.
 inline constexpr int min_parallel_bodies = 256;
 
 namespace detail {
@@ -56,30 +62,134 @@ inline constexpr bool available() {
 }
 
 namespace detail {
+/// sesi's own team of threads. A loop's caller takes chunks itself and the helpers take chunks
+/// as they wake, so a loop never waits for a helper that has not started: on a busy machine a
+/// descheduled helper costs nothing (an OpenMP barrier waits for every thread of the team, and
+/// libgomp's helpers spin while they wait; OMP_WAIT_POLICY is read only when libgomp is loaded).
+/// Helpers and the caller wait passively (a condition variable), never by spinning.
+class Team {
+ public:
+  using Call = void (*)(void* context, int chunk);
+
+  /// Never destroyed: its helpers wait until the process ends (no join at exit, and none in a
+  /// forked child, where the helpers do not exist).
+  static Team& instance() {
+    static Team* const team = new Team;
+    return *team;
+  }
+
+  /// call(context, c) for c in [0, chunks), on the calling thread and up to `helpers` others.
+  /// False (nothing run) when the team is busy with another loop (a nested loop, or a loop on
+  /// another thread): the caller then runs the chunks itself.
+  bool run(int chunks, int helpers, Call call, void* context) {
+    if (inside()) return false;  // before try_lock: this thread may hold busy_ already
+    std::unique_lock<std::mutex> caller(busy_, std::try_to_lock);
+    if (!caller.owns_lock()) return false;
+    std::unique_lock<std::mutex> lock(mutex_);
+    helpers = std::min(helpers, chunks - 1);
+    while (static_cast<int>(workers_.size()) < helpers) {
+      try {
+        const int k = static_cast<int>(workers_.size());
+        workers_.emplace_back([this, k] { work(k); });
+      } catch (...) {  // no more threads to be had: go on with those there are
+        helpers = static_cast<int>(workers_.size());
+      }
+    }
+    call_ = call;
+    context_ = context;
+    chunks_ = chunks;
+    helpers_ = helpers;
+    next_ = 0;
+    finished_ = 0;
+    ++generation_;
+    if (helpers > 0) wake_.notify_all();
+    inside() = true;
+    take_chunks(lock);
+    done_.wait(lock, [&] { return finished_ == chunks_; });  // only chunks already taken
+    inside() = false;
+    chunks_ = 0;
+    call_ = nullptr;
+    context_ = nullptr;
+    return true;
+  }
+
+  Team(const Team&) = delete;
+  Team& operator=(const Team&) = delete;
+
+ private:
+  Team() = default;
+
+  /// Whether this thread is running a chunk (a loop inside one runs serially).
+  static bool& inside() {
+    thread_local bool flag = false;
+    return flag;
+  }
+
+  /// Take and run chunks until none is left (lock held on entry and exit).
+  void take_chunks(std::unique_lock<std::mutex>& lock) {
+    while (next_ < chunks_) {
+      const int c = next_++;
+      const Call call = call_;
+      void* const context = context_;
+      lock.unlock();
+      call(context, c);
+      lock.lock();
+      if (++finished_ == chunks_) done_.notify_one();
+    }
+  }
+
+  void work(int k) {
+    inside() = true;
+    std::unique_lock<std::mutex> lock(mutex_);
+    unsigned long seen = generation_;
+    while (true) {
+      wake_.wait(lock, [&] { return generation_ != seen && next_ < chunks_; });
+      seen = generation_;
+      if (k < helpers_) take_chunks(lock);
+    }
+  }
+
+  std::mutex busy_;   // held by the thread whose loop the team runs
+  std::mutex mutex_;  // guards everything below
+  std::condition_variable wake_, done_;
+  std::vector<std::thread> workers_;
+  Call call_ = nullptr;
+  void* context_ = nullptr;
+  int chunks_ = 0, helpers_ = 0, next_ = 0, finished_ = 0;
+  unsigned long generation_ = 0;
+};
+
 /// The threaded part of for_chunks (chunks >= 2), apart so that the serial path stays small
 /// enough to be inlined: a three-body step must not pay for the thread machinery.
 template <class F>
 void for_chunks_on_threads(int n, int chunks, F& f) {
-  std::exception_ptr failure;
-  int failed_chunk = chunks;
-  std::mutex guard;
-#if defined(_OPENMP)
-#pragma omp parallel for schedule(static, 1) num_threads(std::min(chunks, threads()))
-#endif
-  for (int c = 0; c < chunks; ++c) {
-    const int begin = static_cast<int>(static_cast<long long>(n) * c / chunks);
-    const int end = static_cast<int>(static_cast<long long>(n) * (c + 1) / chunks);
+  struct Loop {
+    F& f;
+    int n, chunks;
+    std::exception_ptr failure;
+    int failed_chunk;
+    std::mutex guard;
+  } loop{f, n, chunks, nullptr, chunks, {}};
+  const auto call = [](void* context, int c) {
+    Loop& l = *static_cast<Loop*>(context);
+    const int begin = static_cast<int>(static_cast<long long>(l.n) * c / l.chunks);
+    const int end = static_cast<int>(static_cast<long long>(l.n) * (c + 1) / l.chunks);
     try {
-      f(begin, end, c);
+      l.f(begin, end, c);
     } catch (...) {
-      const std::lock_guard<std::mutex> lock(guard);
-      if (c < failed_chunk) {
-        failed_chunk = c;
-        failure = std::current_exception();
+      const std::lock_guard<std::mutex> lock(l.guard);
+      if (c < l.failed_chunk) {
+        l.failed_chunk = c;
+        l.failure = std::current_exception();
       }
     }
+  };
+  // A thread for every four chunks (chunks_for), up to threads().
+  const int team = std::min(threads(), (chunks + 3) / 4);
+  if (team < 2 || !Team::instance().run(chunks, team - 1, call, &loop)) {
+    for (int c = 0; c < chunks; ++c) call(&loop, c);  // one thread, or the team is busy: here
   }
-  if (failure) std::rethrow_exception(failure);
+  if (loop.failure) std::rethrow_exception(loop.failure);
 }
 }  // namespace detail
 
@@ -98,8 +208,17 @@ void for_chunks(int n, int chunks, F&& f) {
   detail::for_chunks_on_threads(n, chunks, f);
 }
 
-/// The number of chunks for a loop over n bodies: one per thread above min_parallel_bodies.
-inline int chunks_for(int n) { return n >= min_parallel_bodies ? threads() : 1; }
+/// The threads a loop over n bodies uses: up to threads(), as many as get min_parallel_bodies
+/// bodies each (so one below twice that: a second thread would not pay for waking it).
+inline int threads_for(int n) { return std::max(1, std::min(threads(), n / min_parallel_bodies)); }
+
+/// The number of chunks for a loop over n bodies: 1 on one thread, else four per thread, so that
+/// the threads that are running take the chunks of one that is not (a busy machine). The chunks
+/// do not change a result, only who computes it.
+inline int chunks_for(int n) {
+  const int t = threads_for(n);
+  return t > 1 ? 4 * t : 1;
+}
 
 /// f(i) for i in [0, n), in parallel above min_parallel_bodies. f must write only to i's own data.
 template <class F>

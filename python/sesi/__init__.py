@@ -48,8 +48,10 @@ class InstabilityError(RuntimeError):
 
 
 def methods():
-    """The methods of `sesi run --method`: a list of dicts with name, order, stages (force
-    evaluations per step) and about (the coefficients' source)."""
+    """The methods of `sesi run --method`, as `sesi run --list-methods --json` lists them: a list of
+    dicts with name, order, family ("chart", "processed", "geodesic" or "reference"), processed,
+    stages (force evaluations per step), output_stages (more per state read), spaces (the [space]
+    kinds it runs on) and about (the coefficients' source)."""
     return _methods()
 
 

@@ -7,6 +7,7 @@
 
 #include "bench_command.hpp"
 #include "errors.hpp"
+#include "method_list.hpp"
 #include "methods.hpp"
 #include "run_command.hpp"
 #include "signals.hpp"
@@ -17,7 +18,8 @@ namespace {
 using namespace sesi::program;
 
 std::string run_footer() {
-  std::string text = "\nMETHODS (--method, [integrator] method):\n";
+  std::string text =
+      "\nMETHODS (--method, [integrator] method; machine-readable: sesi run --list-methods [--json]):\n";
   for (const MethodInfo& m : method_catalogue()) {
     char line[160];
     std::snprintf(line, sizeof line, "  %-18s order %-2d  %.*s\n", std::string(m.name).c_str(), m.order,
@@ -50,7 +52,10 @@ std::string run_footer() {
       "  diagnostics.csv  t, energy, energy_error, momentum-map components\n"
       "  exact.csv        exact positions (scenes with an exact solution: the default scene)\n"
       "  summary.json     settings, energy and momentum-map errors, final state, wall time\n"
-      "  checkpoint       the state to go on from (checkpoint_every, or a signal): sesi resume DIR\n"
+      "  checkpoint       the state to go on from (checkpoint_every and the run's end, or a\n"
+      "                   signal): sesi resume DIR\n"
+      "  sesi-manifest.txt  the files sesi wrote: a rerun into DIR replaces them (and keeps\n"
+      "                   pictures it does not list)\n"
       "\nEXIT STATUS:\n"
       "  0 done;  2 bad scene or argument (one line on stderr, nothing written);\n"
       "  3 the run went wrong: the state became non-finite, the energy error passed the guard\n"
@@ -88,8 +93,8 @@ int main(int argc, char** argv) {
   run->add_option("SCENE", options.scene_path,
                   "Scene file (TOML). Without it, the seed paper's three-body scene.")
       ->type_name("FILE");
-  run->add_option("--out,-o", options.out, "Output directory (default ./sesi-out/<scene name>).")
-      ->type_name("DIR");
+  auto* out_opt = run->add_option("--out,-o", options.out, "Output directory (default ./sesi-out/<scene name>).")
+                      ->type_name("DIR");
   auto* method_opt =
       run->add_option("--method,-m", method,
                       "Integration method (see METHODS), or auto; replaces the scene's.")
@@ -125,6 +130,12 @@ int main(int argc, char** argv) {
   auto* format_opt =
       run->add_option("--trajectory-format", trajectory_format, "Trajectory format: csv or h5md.")->type_name("F");
   run->add_flag("--quiet,-q", options.quiet, "No report on stdout and no progress bar.");
+  bool list_methods = false, list_json = false;
+  auto* list_opt = run->add_flag("--list-methods", list_methods,
+                                 "Print the methods, one name per line, and run nothing.");
+  auto* json_opt = run->add_flag("--json", list_json,
+                                 "With --list-methods: one JSON object, each method's name, order, family, "
+                                 "processed, stages, output_stages, spaces and about.");
   run->footer(run_footer());
   ResumeOptions resume_options;
   double resume_t_end = 0.0;
@@ -153,6 +164,7 @@ int main(int argc, char** argv) {
     print_error(e.what());
     return exit_bad_input;
   }
+  options.out_given = out_opt->count() > 0;
   if (method_opt->count() > 0) options.method = method;
   if (tolerance_opt->count() > 0) options.tolerance = tolerance;
   if (dt_opt->count() > 0) options.dt = dt;
@@ -165,6 +177,21 @@ int main(int argc, char** argv) {
   if (resume_threads_opt->count() > 0) resume_options.threads = resume_threads;
   if (format_opt->count() > 0) options.trajectory_format = trajectory_format;
   if (skin_opt->count() > 0) options.neighbour_skin = neighbour_skin;
+
+  if (run->parsed() && (list_methods || list_json)) {
+    if (!list_methods) {
+      print_error("--json: only with --list-methods");
+      return exit_bad_input;
+    }
+    for (const CLI::Option* o : run->get_options()) {
+      if (o != list_opt && o != json_opt && o->count() > 0) {
+        print_error("--list-methods: takes no scene and no other option but --json (got " + o->get_name() + ")");
+        return exit_bad_input;
+      }
+    }
+    std::fputs(method_list_text(list_json).c_str(), stdout);
+    return std::fflush(stdout) == 0 ? exit_ok : exit_internal;
+  }
 
   try {
     if (bench->parsed()) return bench_command(bench_options);

@@ -152,14 +152,21 @@ int execute(const Scene& scene, StagingDir& staging, bool quiet, const Checkpoin
   const RunOutcome outcome =
       run_loop(scene, *integrator, *recorder, RunControl{&signals::stop_requested(), &progress, {}, checkpoint}, from);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // A resumed run that took no checkpoint of its own (one resumed at its end, or stopped before
+  // its next) keeps the one it went on from, with the settings now in force: the outputs never
+  // lose their checkpoint.
+  if (from && checkpoint_step < 0) checkpoint(*from);
   progress.finish();
   recorder->finish(outcome, wall);
   const std::filesystem::path dir = staging.publish(outcome.complete());
 
+  // A stopped run's checkpoint is at the step it stopped after (run_loop): one step number.
   const std::string kept =
       checkpoint_step < 0 ? std::string()
-                          : "; resume from its checkpoint (step " + std::to_string(checkpoint_step) +
-                                ") with: sesi resume " + dir.string();
+      : checkpoint_step == outcome.steps_done
+          ? "; resume from its checkpoint there with: sesi resume " + dir.string()
+          : "; resume from its checkpoint (step " + std::to_string(checkpoint_step) + ") with: sesi resume " +
+                dir.string();
   if (const auto& a = scene.integrator.auto_choice;
       a && recorder->invariants().max_rel_energy_error > 10 * a->tolerance) {
     std::fprintf(stderr,
@@ -174,8 +181,9 @@ int execute(const Scene& scene, StagingDir& staging, bool quiet, const Checkpoin
       if (!quiet) print_report(scene, *recorder, outcome, wall, dir);
       return exit_ok;
     case StopReason::interrupted:
-      print_error(scene.name + ": interrupted after step " + std::to_string(outcome.steps_done) +
-                  "; the outputs so far are in " + dir.string() + ", marked incomplete" + kept);
+      print_error(scene.name + ": interrupted after step " + std::to_string(outcome.steps_done) + " (t = " +
+                  format_number(static_cast<double>(outcome.steps_done) * *scene.integrator.dt) +
+                  "); the outputs so far are in " + dir.string() + ", marked incomplete" + kept);
       return exit_interrupted;
     case StopReason::non_finite:
     case StopReason::invariant_failed:
@@ -208,6 +216,8 @@ std::filesystem::path resume_target(const std::filesystem::path& source) {
     }
   }
   static constexpr std::string_view staging = ".sesi-";
+  // A killed run's staging directory inside a mount point DIR: DIR/.sesi-XXXXXX (output_dir.hpp).
+  if (name.size() == staging.size() + 6 && name.starts_with(staging)) return source.parent_path();
   const std::size_t at = name.rfind(staging);
   if (name.size() > 1 && name.front() == '.' && at != std::string::npos && at > 1 &&
       name.size() - at - staging.size() == 6) {
@@ -224,20 +234,23 @@ std::filesystem::path checkpoint_source(const std::filesystem::path& dir) {
   if (fs::exists(dir / checkpoint_file_name, ec)) return dir;
   fs::path parent = dir.parent_path();
   if (parent.empty()) parent = ".";
-  const std::string prefix = "." + dir.filename().string() + ".sesi-";
   fs::path best;
   long best_step = -1;
-  for (const fs::directory_entry& entry : fs::directory_iterator(parent, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (!name.starts_with(prefix) || !fs::exists(entry.path() / checkpoint_file_name, ec)) continue;
-    try {
-      const long step = read_checkpoint(entry.path() / checkpoint_file_name).step;
-      if (step > best_step) {
-        best_step = step;
-        best = entry.path();
+  // Beside DIR (".DIR.sesi-XXXXXX"), or inside it when it is a mount point (".sesi-XXXXXX").
+  for (const auto& [where, prefix] : {std::pair{parent, "." + dir.filename().string() + ".sesi-"},
+                                      std::pair{dir, std::string(".sesi-")}}) {
+    for (const fs::directory_entry& entry : fs::directory_iterator(where, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (!name.starts_with(prefix) || !fs::exists(entry.path() / checkpoint_file_name, ec)) continue;
+      try {
+        const long step = read_checkpoint(entry.path() / checkpoint_file_name).step;
+        if (step > best_step) {
+          best_step = step;
+          best = entry.path();
+        }
+      } catch (const InputError&) {
+        // not a usable checkpoint: the directory is left as it is
       }
-    } catch (const InputError&) {
-      // not a usable checkpoint: the directory is left as it is
     }
   }
   return best.empty() ? dir : best;
@@ -246,6 +259,9 @@ std::filesystem::path checkpoint_source(const std::filesystem::path& dir) {
 }  // namespace
 
 int run_command(const RunOptions& options) {
+  if (options.out_given && options.out.empty()) {  // not the default, ./sesi-out/<scene name>
+    throw InputError(Origin{}, "--out", "expected a directory, got an empty path");
+  }
   Scene scene = options.scene_path.empty() ? paper_scene() : read_scene_file(options.scene_path);
   apply_overrides(scene, options);
   const std::filesystem::path target =
@@ -279,7 +295,8 @@ int resume_command(const ResumeOptions& options) {
   }
   signals::begin_run();
   const std::filesystem::path target = resume_target(source);
-  StagingDir staging(target, "sesi resume", source.parent_path() == target.parent_path() ? source : std::filesystem::path());
+  const bool beside = source.parent_path() == target.parent_path() || source.parent_path() == target;
+  StagingDir staging(target, "sesi resume", beside ? source : std::filesystem::path());
   const int status = execute(scene, staging, options.quiet, &checkpoint, source);
   // A killed run's staging directory or DIR.incomplete, now gone on from into DIR.
   if (status == exit_ok && source != staging.target()) remove_superseded(source);

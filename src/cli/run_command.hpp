@@ -12,6 +12,7 @@ namespace sesi::program {
 struct RunOptions {
   std::string scene_path;  ///< empty: the embedded default (the seed's scene)
   std::string out;         ///< empty: ./sesi-out/<scene name>
+  bool out_given = false;  ///< --out was given (an empty one is refused)
   std::optional<std::string> method;  ///< a method name or "auto"
   std::optional<double> tolerance;    ///< method auto's target max relative energy error
   std::optional<double> dt;

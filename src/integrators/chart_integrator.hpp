@@ -4,6 +4,7 @@
 /// system, one composition engine, and the diagnostics of the framed state.
 
 #include <memory>
+#include <stdexcept>
 
 #include <sesi/diagnostics.hpp>
 #include <sesi/recharting.hpp>
@@ -47,6 +48,11 @@ class ChartIntegrator final : public Integrator {
         x_(initial_state<Chart>(scene)),
         stepper_(make_stepper(scene.integrator.method, sys_)) {
     if constexpr (sesi::ClusterChart<Chart>) enter_cluster_frame(scene);
+    // A body that starts near a singular set of the scene's chart is re-charted before the first
+    // step, as after every step: else that step runs in the singular chart (on S^9 a body at
+    // sin q_8 = 0.11 turns its last angle by 0.9 rad in one step of 0.01, and sesi8-kahan-li
+    // ended 2e-4 off where geodesic8-kahan-li was 1e-13).
+    if constexpr (sesi::Rechartable<Chart>) sesi::rechart(sys_, x_, sesi::RechartPolicy<double>{});
     if (stepper_->processed()) {
       dt_ = scene.integrator.dt.value_or(0.0);
       initial_ = x_;
@@ -109,24 +115,20 @@ class ChartIntegrator final : public Integrator {
     sesi::State<Chart> moved;
     const bool rebase = stepper_->processed() && stepper_->entered_step() != 0.0 && stepper_->entered_step() != dt_;
     if (rebase) stepper_->reentered(x_, dt_, moved);
-    const sesi::State<Chart>& x = rebase ? moved : x_;
-    FramedState out;
-    out.q = x.q;
-    out.p = x.p;
-    out.clustered = x.clustered;
-    out.frames.assign(x.frames.begin(), x.frames.end());
-    if (x.clustered) out.cluster = x.cluster;
-    return out;
+    return framed(rebase ? moved : x_);
   }
   void restore(const FramedState& state) override {
-    x_.q = state.q;
-    x_.p = state.p;
-    x_.frames.assign(state.frames.begin(), state.frames.end());
-    x_.clustered = state.clustered;
-    if (state.clustered) x_.cluster = state.cluster;
-    shown_valid_ = false;
+    take(state);
     // (The initial state, e.g. another method's before its first step, is the state itself.)
     if (stepper_->processed()) stepper_->assume_entered(dt_ == 0.0 || same_state(x_, initial_) ? 0.0 : dt_);
+  }
+  FramedState shown_state() const override { return framed(shown()); }
+  void start_from(const FramedState& state) override {
+    take(state);
+    if (stepper_->processed()) {
+      initial_ = x_;  // the state itself until the first step (restore and framed_state)
+      stepper_->assume_entered(0.0);
+    }
   }
   /// In the scene's own chart: bodies re-charted by the stepper are mapped back (q and p of
   /// the outputs and of summary.json always mean the same coordinates).
@@ -153,6 +155,38 @@ class ChartIntegrator final : public Integrator {
       shown_valid_ = true;
     }
     return shown_;
+  }
+  static FramedState framed(const sesi::State<Chart>& x) {
+    FramedState out;
+    out.q = x.q;
+    out.p = x.p;
+    out.clustered = x.clustered;
+    out.frames.assign(x.frames.begin(), x.frames.end());
+    if (x.clustered) out.cluster = x.cluster;
+    return out;
+  }
+  /// x_ <- state, a chart method's state of this scene's size (anything else is a caller's
+  /// mistake, never reinterpreted: std::logic_error).
+  void take(const FramedState& state) {
+    if (state.embedded) {
+      throw std::logic_error("a chart method's integrator was given a geodesic method's state (x, v) to restore");
+    }
+    const auto sized = [&](const Eigen::MatrixXd& m) { return m.rows() == x_.q.rows() && m.cols() == x_.q.cols(); };
+    const auto square = [&](const Eigen::MatrixXd& m) {
+      return m.rows() == sys_.ambient_dim() && m.cols() == sys_.ambient_dim();
+    };
+    bool fits = sized(state.q) && sized(state.p) &&
+                (state.frames.empty() || state.frames.size() == static_cast<std::size_t>(x_.bodies())) &&
+                (!state.clustered || square(state.cluster));
+    for (const Eigen::MatrixXd& f : state.frames) fits = fits && square(f);
+    if constexpr (!sesi::ClusterChart<Chart>) fits = fits && !state.clustered;
+    if (!fits) throw std::logic_error("the chart state to restore has the wrong size");
+    x_.q = state.q;
+    x_.p = state.p;
+    x_.frames.assign(state.frames.begin(), state.frames.end());
+    x_.clustered = state.clustered;
+    if (state.clustered) x_.cluster = state.cluster;
+    shown_valid_ = false;
   }
   static bool same_state(const sesi::State<Chart>& a, const sesi::State<Chart>& b) {
     const auto same = [](const auto& u, const auto& v) {

@@ -37,10 +37,12 @@ std::unique_ptr<Integrator> make_integrator(const Scene& scene) {
 }
 
 std::unique_ptr<Integrator> make_integrator(const Scene& scene, const Integrator& from) {
-  FramedState state = from.framed_state();
+  // The post-processed state: a processed method's kernel's variables are not the state, and
+  // another method (or the same with another step) would step them as if they were.
+  FramedState state = from.shown_state();
   if (state.embedded == is_embedded_method(scene.integrator.method)) {
     std::unique_ptr<Integrator> next = make_integrator(scene);
-    next->restore(state);
+    next->start_from(state);
     return next;
   }
   // A chart state and an embedded state: through the scene's chart, as the initial state.

@@ -180,6 +180,20 @@ class EmbeddedIntegrator final : public Integrator {
     }
     return out;
   }
+  FramedState shown_state() const override {
+    FramedState out;
+    out.embedded = true;
+    out.x = shown().x;
+    out.v = shown().v;
+    return out;
+  }
+  void start_from(const FramedState& state) override {
+    restore(state);
+    if (processed_) {
+      initial_ = e_;  // the state itself until the first step (restore and framed_state)
+      processed_->restart();
+    }
+  }
   void restore(const FramedState& state) override {
     if (!state.embedded) {
       throw std::logic_error("a geodesic method's integrator was given a chart state (q, p) to restore");

@@ -59,6 +59,13 @@ class Integrator {
   /// state of its own kind only (FramedState::embedded; make_integrator(scene, from) converts).
   virtual FramedState framed_state() const = 0;
   virtual void restore(const FramedState& state) = 0;
+  /// The state the outputs see, of the integrator's kind: framed_state() for a plain method, the
+  /// post-processed state for a processed one (whose framed_state() is its kernel's variables).
+  virtual FramedState shown_state() const = 0;
+  /// Go on from state (of its own kind) taken as the state itself, as a new initial state: a
+  /// processed method enters its kernel's variables at its next step. Another method's
+  /// shown_state() starts this one where that one stood (make_integrator(scene, from)).
+  virtual void start_from(const FramedState& state) = 0;
   /// With a non-finite energy: the first body (1-based) whose kinetic energy or potential
   /// gradient is not finite, or 0.
   virtual int body_with_non_finite_energy() = 0;
@@ -71,8 +78,10 @@ class Integrator {
 std::unique_ptr<Integrator> make_integrator(const Scene& scene);
 
 /// The integrator of scene's method at the current state of `from`, an integrator of the same
-/// scene with maybe another method (sesi.Simulation.method): from's framed state when both hold
-/// the same kind, else from's state read in the scene's chart (read()) as the initial state.
+/// scene with maybe another method (sesi.Simulation.method), started from the state from's
+/// outputs show (never a processed method's kernel's variables, which another method or step
+/// would take for the state): from's shown_state() when both hold the same kind, else from's
+/// state read in the scene's chart (read()), as the initial state.
 std::unique_ptr<Integrator> make_integrator(const Scene& scene, const Integrator& from);
 
 }  // namespace sesi::program

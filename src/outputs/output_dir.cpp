@@ -32,12 +32,22 @@ namespace {
 /// directory without it is not sesi's to remove.
 constexpr std::string_view marker_name = ".sesi-staging";
 
-/// Every name sesi (and tools/plot_run.py) writes into an output directory: the one list.
+/// The run's manifest, written into every output directory: the files sesi wrote there, one
+/// name a line after a first line that says what it is. A run repeated into the directory
+/// replaces exactly these and keeps everything else (tools/plot_run.py adds its plot).
+constexpr std::string_view manifest_name = "sesi-manifest.txt";
+constexpr std::string_view manifest_head = "# sesi-manifest 1:";
+
+/// Every name sesi writes into an output directory (pictures are sesi's only by a manifest).
 bool is_sesi_name(std::string_view name) {
-  static constexpr std::array<std::string_view, 7> names = {
-      "trajectory.csv", "trajectory.h5", "diagnostics.csv", "exact.csv", "summary.json", "checkpoint", marker_name};
+  static constexpr std::array<std::string_view, 8> names = {"trajectory.csv", "trajectory.h5", "diagnostics.csv",
+                                                            "exact.csv",      "summary.json",  "checkpoint",
+                                                            marker_name,      manifest_name};
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+bool is_picture(std::string_view name) {
   static constexpr std::array<std::string_view, 3> plots = {".png", ".pdf", ".svg"};
-  if (std::find(names.begin(), names.end(), name) != names.end()) return true;
   return std::any_of(plots.begin(), plots.end(), [&](std::string_view extension) {
     return name.size() > extension.size() && name.ends_with(extension);
   });
@@ -47,6 +57,27 @@ bool is_sesi_name(std::string_view name) {
 bool is_sesi_output(const fs::directory_entry& entry) {
   std::error_code ec;
   return entry.is_regular_file(ec) && is_sesi_name(entry.path().filename().string());
+}
+
+/// The names dir's manifest lists (with the manifest itself); nullopt when dir has none (an
+/// older sesi's outputs) or the file of that name is not sesi's.
+std::optional<std::vector<std::string>> read_manifest(const fs::path& dir) {
+  std::ifstream in(dir / manifest_name);
+  std::string line;
+  if (!in || !std::getline(in, line) || !line.starts_with(manifest_head)) return std::nullopt;
+  std::vector<std::string> names = {std::string(manifest_name)};
+  while (std::getline(in, line)) {
+    if (!line.empty() && line != "." && line != ".." && line.find('/') == std::string::npos) names.push_back(line);
+  }
+  return names;
+}
+
+/// Whether `entry` of a directory with `manifest` (or none) is a file sesi wrote there.
+bool is_owned(const fs::directory_entry& entry, const std::optional<std::vector<std::string>>& manifest) {
+  if (!manifest) return is_sesi_output(entry);
+  std::error_code ec;
+  const std::string name = entry.path().filename().string();
+  return entry.is_regular_file(ec) && std::find(manifest->begin(), manifest->end(), name) != manifest->end();
 }
 
 /// A file sesi writes under a temporary name before renaming it (NAME.tmp); only in staging.
@@ -142,12 +173,13 @@ fs::path beside(const fs::path& base, const std::string& suffix, bool replace) {
   }
 }
 
-/// The sesi outputs in `dir` now (name and identity).
+/// The files sesi wrote in `dir` (by its manifest), now (name and identity).
 std::vector<std::pair<std::string, Id>> sesi_entries(const fs::path& dir) {
   std::vector<std::pair<std::string, Id>> out;
+  const auto manifest = read_manifest(dir);
   std::error_code ec;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
-    if (!is_sesi_output(entry)) continue;
+    if (!is_owned(entry, manifest)) continue;
     if (const auto id = identity(entry.path())) out.emplace_back(entry.path().filename().string(), *id);
   }
   return out;
@@ -191,14 +223,14 @@ std::string remove_if_stale(const fs::path& dir, const std::string& rest) {
   return {};
 }
 
-/// Remove the staging directories of killed runs into `target`, and name the folders that look
-/// like them but are not sesi's to remove; one line on stderr.
-void clean_stale(const fs::path& parent, const fs::path& target, const fs::path& resuming) {
-  const fs::path shown = target.parent_path();  // as the user gave it ("" rather than ".")
-  const std::string prefix = "." + target.filename().string() + ".sesi-";
+/// Remove the staging directories of killed runs into `target` (the entries PREFIX-XXXXXX of
+/// `where`, shown as in `shown`), and name the folders that look like them but are not sesi's to
+/// remove; one line on stderr.
+void clean_stale(const fs::path& where, const fs::path& shown, const std::string& prefix, const fs::path& target,
+                 const fs::path& resuming) {
   std::vector<std::string> removed, left;
   std::error_code ec;
-  for (const fs::directory_entry& entry : fs::directory_iterator(parent, ec)) {
+  for (const fs::directory_entry& entry : fs::directory_iterator(where, ec)) {
     const std::string name = entry.path().filename().string();
     if (!name.starts_with(prefix) || name == prefix + "lock") continue;
     if (!resuming.empty() && entry.path().filename() == resuming.filename()) continue;  // sesi resume's source
@@ -214,6 +246,25 @@ void clean_stale(const fs::path& parent, const fs::path& target, const fs::path&
   if (!left.empty()) parts.push_back("left " + join(left) + "; remove them if they are not needed");
   if (!parts.empty()) warn(target.string() + ": " + join(parts, "; "));
 }
+
+/// Whether `dir` (a directory) is a mount point, which no rename can replace: its device differs
+/// from its parent's, or (a bind mount of the same file system) statx says it is a mount's root.
+bool is_mount_point(const fs::path& dir, const fs::path& parent) {
+  struct stat own {}, up {};
+  if (::stat(dir.c_str(), &own) != 0 || ::stat(parent.c_str(), &up) != 0) return false;
+  if (own.st_dev != up.st_dev) return true;
+#if defined(STATX_ATTR_MOUNT_ROOT)
+  struct statx sx {};
+  if (::statx(AT_FDCWD, dir.c_str(), AT_SYMLINK_NOFOLLOW, STATX_BASIC_STATS, &sx) == 0 &&
+      (sx.stx_attributes_mask & STATX_ATTR_MOUNT_ROOT) != 0) {
+    return (sx.stx_attributes & STATX_ATTR_MOUNT_ROOT) != 0;
+  }
+#endif
+  return own.st_ino == up.st_ino;  // "/" is its own parent
+}
+
+/// A staging directory's or lock's name inside a mount point (".sesi-XXXXXX", ".sesi-lock").
+constexpr std::string_view inside_prefix = ".sesi-";
 
 /// After `dest` received the new outputs, `old` holds what was there before: remove the earlier
 /// sesi outputs (`earlier`) and move everything else into `dest`; what cannot move is kept
@@ -304,6 +355,19 @@ StagingDir::StagingDir(fs::path target, const std::string& option, const fs::pat
     if (target_.filename().empty() && target_.has_relative_path()) target_ = target_.parent_path();
   }
   if (target_.filename().empty()) throw InputError(origin, key, "expected a directory with a name");
+  // The outputs take the place of the target: never the directory the user works in, or one above.
+  const fs::path cwd = fs::current_path(ec);
+  const fs::path resolved = fs::weakly_canonical(fs::absolute(target_, ec), ec);
+  if (!cwd.empty() && !resolved.empty()) {
+    const fs::path inside = cwd.lexically_relative(resolved);
+    if (!inside.empty() && *inside.begin() != "..") {
+      throw InputError(origin, key,
+                       std::string(inside == "." ? "is" : "holds") +
+                           " the current directory, which the outputs would replace; " +
+                           (option == "--out" ? "name a directory for them (for example --out run1)"
+                                              : "run it from another directory"));
+    }
+  }
   const fs::file_status status = fs::symlink_status(target_, ec);
   if (fs::exists(status) && !fs::is_directory(status)) {
     throw InputError(origin, key, "exists and is not a directory (or is a symbolic link)");
@@ -312,26 +376,39 @@ StagingDir::StagingDir(fs::path target, const std::string& option, const fs::pat
   if (parent.empty()) parent = ".";
   fs::create_directories(parent, ec);
   if (ec) throw InputError(origin, key, "cannot create the parent directory: " + ec.message());
-  lock_.acquire(parent / ("." + target_.filename().string() + ".sesi-lock"), key);
+  // A mount point cannot be renamed over: the run stages inside it and moves its files in.
+  inside_ = fs::exists(status) && is_mount_point(target_, parent);
+  const fs::path where = inside_ ? target_ : parent;
+  const std::string prefix = inside_ ? std::string(inside_prefix) : "." + target_.filename().string() + ".sesi-";
+  const std::string place = inside_ ? "the directory" : "the parent directory";
+  lock_.acquire(where / (prefix + "lock"), key);
 
   // From here no other sesi run changes the target or its staging directories.
   if (fs::exists(status)) {
+    const auto manifest = read_manifest(target_);
     for (const fs::directory_entry& entry : fs::directory_iterator(target_, ec)) {
-      if (!is_sesi_output(entry)) {
-        throw InputError(origin, key,
-                         "exists and holds '" + entry.path().filename().string() +
-                             "', which sesi did not write; choose another directory or empty it");
+      const std::string name = entry.path().filename().string();
+      if (inside_ && name.starts_with(inside_prefix)) continue;  // the lock and staging directories
+      if (is_owned(entry, manifest)) {
+        if (const auto id = identity(entry.path())) earlier_.emplace_back(name, *id);
+        continue;
       }
-      if (const auto id = identity(entry.path())) earlier_.emplace_back(entry.path().filename().string(), *id);
+      // What sesi did not write is kept: pictures (a user's, or any in an older sesi's outputs,
+      // which have no manifest). Anything else is refused, so that a mistyped --out is refused.
+      if (!is_picture(name)) {
+        throw InputError(origin, key,
+                         "exists and holds '" + name + "', which sesi did not write; choose another directory or "
+                         "empty it");
+      }
     }
     if (ec) throw InputError(origin, key, "cannot read the directory: " + ec.message());
     if (const auto id = identity(target_)) earlier_dir_ = *id;
   }
-  clean_stale(parent, target_, resuming);
+  clean_stale(where, inside_ ? target_ : target_.parent_path(), prefix, target_, resuming);
 
-  std::string pattern = (parent / ("." + target_.filename().string() + ".sesi-XXXXXX")).string();
+  std::string pattern = (where / (prefix + "XXXXXX")).string();
   if (mkdtemp(pattern.data()) == nullptr) {
-    throw InputError(origin, key, std::string("cannot write to the parent directory: ") + std::strerror(errno));
+    throw InputError(origin, key, "cannot write to " + place + ": " + std::strerror(errno));
   }
   staging_ = pattern;
   std::ofstream marker(staging_ / marker_name);
@@ -340,7 +417,7 @@ StagingDir::StagingDir(fs::path target, const std::string& option, const fs::pat
   if (!marker) {
     const int error = errno;
     fs::remove_all(staging_, ec);  // made just now, by this run
-    throw InputError(origin, key, std::string("cannot write to the parent directory: ") + std::strerror(error));
+    throw InputError(origin, key, "cannot write to " + place + ": " + std::strerror(error));
   }
   // mkdtemp makes the directory private (0700); give it the usual permissions.
   const mode_t mask = umask(0);
@@ -357,6 +434,8 @@ StagingDir::~StagingDir() {
 }
 
 fs::path StagingDir::publish(bool complete) {
+  write_manifest();
+  if (inside_) return publish_inside(complete);
   if (!complete && holds_complete_run(target_)) {
     const fs::path dest = beside(target_, "incomplete", true);
     warn(target_.string() + " holds a complete earlier run, which is kept; the outputs of this run go to " +
@@ -390,6 +469,8 @@ fs::path StagingDir::publish_to(const fs::path& dest, const std::vector<Entry>& 
   if (!exchange(staging_, dest)) {
     old = staging_.string() + ".old";
     if (std::rename(dest.c_str(), old.c_str()) != 0) {
+      // A mount point that is_mount_point missed: the files go in one by one (same file system).
+      if (errno == EBUSY) return move_into(dest, earlier);
       throw std::runtime_error("cannot replace " + dest.string() + ": " + std::strerror(errno));
     }
     if (std::rename(staging_.c_str(), dest.c_str()) != 0) {
@@ -405,12 +486,83 @@ fs::path StagingDir::publish_to(const fs::path& dest, const std::vector<Entry>& 
   return dest;
 }
 
+void StagingDir::write_manifest() {
+  // Everything in the staging directory is this run's (but the marker, removed on publishing).
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(staging_, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name != marker_name && name != manifest_name) names.push_back(name);
+  }
+  std::sort(names.begin(), names.end());  // the same bytes for the same outputs
+  std::ofstream out(staging_ / manifest_name);
+  out << manifest_head
+      << " the files sesi wrote here; a run repeated into this directory replaces them and deletes nothing else\n";
+  for (const std::string& name : names) out << name << '\n';
+  out.close();
+  if (!out || ec) {
+    throw std::runtime_error("cannot write " + (target_ / manifest_name).string() + ": " +
+                             (ec ? ec.message() : std::string(std::strerror(errno))));
+  }
+}
+
+fs::path StagingDir::publish_inside(bool complete) {
+  if (!complete && holds_complete_run(target_)) {
+    // Beside the complete run, inside the mount point (the parent may be another file system).
+    fs::path free = target_ / "incomplete";
+    for (int k = 2; !replaceable(free, false); ++k) free = target_ / ("incomplete-" + std::to_string(k));
+    warn(target_.string() + " holds a complete earlier run, which is kept; the outputs of this run go to " +
+         free.string());
+    return publish_to(free, sesi_entries(free));
+  }
+  std::vector<Entry> earlier;
+  if (identity(target_) == std::optional<Id>(earlier_dir_)) earlier = earlier_;
+  return move_into(target_, earlier);
+}
+
+fs::path StagingDir::move_into(const fs::path& dest, const std::vector<Entry>& earlier) {
+  // File by file: remove the earlier run's files (those there when this run started), then
+  // rename this run's in, the summary and the manifest last; anything else stays where it is.
+  std::error_code ec;
+  for (const auto& [name, id] : earlier) {
+    if (identity(dest / name) == std::optional<Id>(id)) fs::remove(dest / name, ec);
+  }
+  std::vector<std::string> names, aside;
+  for (const fs::directory_entry& entry : fs::directory_iterator(staging_, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name != marker_name) names.push_back(name);
+  }
+  const auto rank = [](const std::string& name) { return name == manifest_name ? 2 : name == "summary.json" ? 1 : 0; };
+  std::sort(names.begin(), names.end(),
+            [&](const std::string& a, const std::string& b) { return std::pair(rank(a), a) < std::pair(rank(b), b); });
+  for (const std::string& name : names) {
+    if (rename_noreplace(staging_ / name, dest / name) == 0) continue;
+    int error = errno;
+    if (error == EEXIST) {  // a file of that name added during the run: kept beside
+      const fs::path kept = beside(dest / name, "kept", false);
+      if (rename_noreplace(dest / name, kept) == 0) {
+        aside.push_back(name + " -> " + kept.filename().string());
+        if (rename_noreplace(staging_ / name, dest / name) == 0) continue;
+      }
+      error = errno;
+    }
+    throw std::runtime_error("cannot move the outputs to " + (dest / name).string() + ": " + std::strerror(error));
+  }
+  published_ = true;
+  set_live(staging_, nullptr);
+  fs::remove(staging_ / marker_name, ec);
+  fs::remove(staging_, ec);
+  if (!aside.empty()) warn(dest.string() + ": kept what sesi did not write, renamed: " + join(aside));
+  return dest;
+}
+
 bool remove_superseded(const fs::path& dir) {
   std::error_code ec;
   if (!fs::is_directory(fs::symlink_status(dir, ec))) return false;
+  const auto manifest = read_manifest(dir);
   std::vector<fs::path> files;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
-    if (!is_sesi_output(entry) && !is_sesi_temporary(entry)) return false;
+    if (!is_owned(entry, manifest) && !is_sesi_output(entry) && !is_sesi_temporary(entry)) return false;
     files.push_back(entry.path());
   }
   if (ec) return false;

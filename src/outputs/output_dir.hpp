@@ -6,10 +6,16 @@
 /// Until then an existing output directory is untouched; a run killed outright leaves only the
 /// hidden staging directory, never a file that looks finished.
 ///
+/// A mount point cannot be renamed over: for one, the staging directory and the lock are inside
+/// it (".sesi-XXXXXX", ".sesi-lock"), and the files are moved in one by one.
+///
 /// Nothing that sesi did not write is ever deleted:
-/// - an existing output directory is accepted only if it holds nothing but sesi outputs
-///   (trajectory.csv, trajectory.h5, diagnostics.csv, exact.csv, summary.json, checkpoint and
-///   plots *.png, *.pdf, *.svg), so a mistyped --out never deletes other files;
+/// - every output directory holds the run's manifest (sesi-manifest.txt), the files sesi wrote;
+///   a run repeated into it replaces exactly those and keeps the rest, named on stderr;
+/// - an existing output directory is accepted only if it holds nothing but those (without a
+///   manifest, an older sesi's: trajectory.csv, trajectory.h5, diagnostics.csv, exact.csv,
+///   summary.json, checkpoint) and pictures (*.png, *.pdf, *.svg: kept unless the manifest lists
+///   them), so a mistyped --out never deletes other files;
 /// - entries added to it during the run are moved into the new outputs, and named on stderr;
 /// - a run that did not complete never replaces a complete earlier run: it goes to DIR.incomplete;
 /// - a lock file in the parent (".NAME.sesi-lock", flock) keeps two runs out of one directory;
@@ -69,12 +75,19 @@ class StagingDir {
   using Entry = std::pair<std::string, std::pair<dev_t, ino_t>>;
 
   std::filesystem::path publish_to(const std::filesystem::path& dest, const std::vector<Entry>& earlier);
+  /// The run's manifest (sesi-manifest.txt) in the staging directory: what it holds.
+  void write_manifest();
+  /// publish() for a target that is a mount point: the files moved in one by one.
+  std::filesystem::path publish_inside(bool complete);
+  /// Move the staged files into dest one by one, replacing the `earlier` files there.
+  std::filesystem::path move_into(const std::filesystem::path& dest, const std::vector<Entry>& earlier);
 
   DirLock lock_;
   std::filesystem::path target_, staging_;
   std::vector<Entry> earlier_;  ///< the target's entries when the run started (sesi outputs)
   std::pair<dev_t, ino_t> earlier_dir_{};  ///< the target directory itself then, if it existed
   bool published_ = false;
+  bool inside_ = false;  ///< the target is a mount point: staging, lock and publishing inside it
 };
 
 /// Remove `dir`, a stopped run's outputs that a resumed run has gone on from and published

@@ -1,7 +1,11 @@
 #include "summary.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <variant>
+
+#include <sesi/parallel.hpp>
 
 #include "json_writer.hpp"
 #include "methods.hpp"
@@ -33,6 +37,25 @@ void write_final_state(JsonWriter& json, const Snapshot& s) {
   }
   json.end_array();
   json.end_object();
+}
+
+/// The most threads a loop of the run was given (include/sesi/parallel.hpp): loops over bodies
+/// one per min_parallel_bodies bodies (threads_for); from System::rows_from (= min_parallel_bodies)
+/// bodies on, a long-range pair term (all but Lennard-Jones and the central term) sums tiles of
+/// the pair triangle, up to four per thread (System::tiling, for_chunks).
+int threads_used(const Scene& scene) {
+  const int n = scene.body_count();
+  int used = sesi::parallel::threads_for(n);
+  const bool tiled = std::any_of(scene.potentials.begin(), scene.potentials.end(), [](const PotentialSpec& p) {
+    return !std::holds_alternative<LennardJonesSpec>(p) && !std::holds_alternative<CentralCotangentSpec>(p);
+  });
+  if (tiled && n >= sesi::parallel::min_parallel_bodies) {
+    const int block = std::max(64, (n + 47) / 48), blocks = (n + block - 1) / block;
+    const int threads = sesi::parallel::threads();
+    const int chunks = std::min(blocks * (blocks + 1) / 2, 4 * threads);
+    used = std::max(used, std::min(threads, (chunks + 3) / 4));
+  }
+  return used;
 }
 
 int method_order(std::string_view name) {
@@ -107,6 +130,8 @@ std::string summary_json(const SummaryData& d) {
   json.string("trajectory", scene.integrator.trajectory_format == TrajectoryFormat::h5md ? "trajectory.h5"
                                                                                           : "trajectory.csv");
   json.number("wall_seconds", d.wall_seconds);
+  // --threads (0: all cores), or fewer for a scene too small to pay for them.
+  json.integer("threads_used", threads_used(scene));
   if (const auto& a = scene.integrator.auto_choice) write_auto(json, *a, inv.max_rel_energy_error);
 
   json.begin_object("energy");

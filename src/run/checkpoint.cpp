@@ -17,6 +17,7 @@
 #include "errors.hpp"
 #include "methods.hpp"
 #include "signals.hpp"
+#include "validate.hpp"
 
 namespace sesi::program {
 
@@ -84,6 +85,10 @@ class Out {
 /// Reads what Out wrote; any mismatch throws a Corrupt.
 struct Corrupt {
   std::string what;
+};
+/// The state in the body is that of another version than the first line says.
+struct OtherVersion {
+  int written;
 };
 
 class In {
@@ -389,8 +394,13 @@ Checkpoint parse_body(std::string_view text, int version) {
   c.guard_scale = in.num();
   in.key("step");
   c.step = static_cast<long>(in.integer(0));
+  // The state's first key says which version wrote it (q: 1, x: 2), whatever the first line says.
+  const int written = in.optional_key("q")   ? Checkpoint::chart_version
+                      : in.optional_key("x") ? Checkpoint::version
+                                             : 0;
+  if (written == 0) throw Corrupt{"expected its state ('q' or 'x')"};
+  if (written != version) throw OtherVersion{written};
   if (version == Checkpoint::chart_version) {
-    in.key("q");
     c.state.q = in.matrix(dim, bodies);
     in.key("p");
     c.state.p = in.matrix(dim, bodies);
@@ -403,7 +413,6 @@ Checkpoint parse_body(std::string_view text, int version) {
     if (c.state.clustered) c.state.cluster = in.matrix(ambient, ambient);
   } else {
     c.state.embedded = true;
-    in.key("x");
     c.state.x = in.matrix(ambient, bodies);
     in.key("v");
     c.state.v = in.matrix(ambient, bodies);
@@ -522,12 +531,22 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
                  "first line, expected " + std::to_string(length) + ")");
   }
   if (fnv1a(body) != sum) throw refuse("the checkpoint is corrupted (checksum mismatch)");
+  const std::string reads = "; this sesi reads format version " + std::to_string(Checkpoint::chart_version) +
+                            " (a chart method's q and p) and " + std::to_string(Checkpoint::version) +
+                            " (a geodesic method's x and v)";
   Checkpoint c;
   try {
     c = parse_body(body, version);
   } catch (const Corrupt& e) {
-    throw refuse("the checkpoint is inconsistent: " + e.what);
+    throw refuse("the checkpoint is inconsistent with its format version " + std::to_string(version) + ": " +
+                 e.what + reads);
+  } catch (const OtherVersion& e) {
+    throw refuse("the checkpoint was written by format version " + std::to_string(e.written) +
+                 ", but its first line says version " + std::to_string(version) + reads);
   }
+  // A scene model that no scene file held: the rules of the scene reader, so that an edited
+  // checkpoint (a negative mass with its checksum recomputed) is refused like a scene file.
+  check_scene_model(c.scene, Origin{name});
   // A chart method steps q and p, a geodesic method x and v: the one cannot go on from the
   // other's state (an unknown method is check_method's to report).
   const std::string& method = c.scene.integrator.method;

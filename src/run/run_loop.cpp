@@ -1,5 +1,6 @@
 #include "run_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -151,9 +152,33 @@ double guard_threshold(const Scene& scene) {
 /// The loop of every run: from step `first` of schedule, with the guard's reference given
 /// (a checkpoint's, a RunStart's) or taken from the first state (fresh: that state is also
 /// tracked and written). first_written: the first state is a row of the outputs already.
+/// end_checkpoint: the run ends with a checkpoint (end_checkpoint_step).
 RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& recorder, const RunControl& control,
                      const Schedule& schedule, long first, const RunStart* reference, bool fresh,
-                     bool first_written);
+                     bool first_written, bool end_checkpoint);
+
+/// Whether the last step is one that a longer run takes too: whole, and ending at k dt to the bit
+/// (not at a t_end off the grid by round-off, which its row's t would show). A checkpoint there
+/// goes on as one run; one at another last step would not.
+bool last_step_on_grid(const Schedule& schedule) {
+  const long last = schedule.steps;
+  return schedule.on_grid && schedule.h(last) == schedule.dt &&
+         schedule.time(last) == static_cast<double>(last) * schedule.dt;
+}
+
+/// The step of a finished run's last checkpoint: its last step that every longer run of the scene
+/// checks too (a multiple of output_every, check_every or checkpoint_every) and takes as they do
+/// (the last step only if last_step_on_grid), so that sesi resume --t-end goes on from it as one
+/// run; -1 when there is none after `first`.
+long end_checkpoint_step(const Schedule& schedule, long first, long every, long check_every, long checkpoint_every) {
+  if (!schedule.on_grid) return -1;
+  const long whole = last_step_on_grid(schedule) ? schedule.steps : schedule.steps - 1;
+  long step = -1;
+  for (const long m : {every, check_every, checkpoint_every}) {
+    if (m > 0 && whole >= 0) step = std::max(step, whole / m * m);
+  }
+  return step > first ? step : -1;
+}
 
 }  // namespace
 
@@ -173,26 +198,29 @@ RunStart guard_reference(const Scene& scene, Integrator& integrator) {
 RunOutcome run_loop(const Scene& scene, Integrator& integrator, RunSink& recorder, const RunControl& control,
                     const Checkpoint* from) {
   const Schedule schedule(*scene.integrator.dt, *scene.integrator.t_end);
-  if (!from) return run_steps(scene, integrator, recorder, control, schedule, 0, nullptr, true, true);
+  // A run that takes checkpoints ends with one, and so does every run gone on from one: a
+  // finished run always goes on (sesi resume --t-end) from its end.
+  const bool end_checkpoint = from != nullptr || scene.integrator.checkpoint_every > 0;
+  if (!from) return run_steps(scene, integrator, recorder, control, schedule, 0, nullptr, true, true, end_checkpoint);
   RunStart reference;
   reference.guard_energy = from->guard_energy;
   reference.guard_scale = from->guard_scale;
   // A resumed run's rows and statistics up to its checkpoint are in the recorder already.
   return run_steps(scene, integrator, recorder, control, schedule, from->step, &reference, false,
-                   from->step % scene.integrator.output_every == 0);
+                   from->step % scene.integrator.output_every == 0, end_checkpoint);
 }
 
 RunOutcome run_loop(const Scene& scene, Integrator& integrator, RunSink& sink, const RunControl& control,
                     const RunStart& start) {
   const Schedule schedule(*scene.integrator.dt, *scene.integrator.t_end, start.step, start.t);
-  return run_steps(scene, integrator, sink, control, schedule, start.step, &start, false, true);
+  return run_steps(scene, integrator, sink, control, schedule, start.step, &start, false, true, false);
 }
 
 namespace {
 
 RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& recorder, const RunControl& control,
                      const Schedule& schedule, long first, const RunStart* reference, bool fresh,
-                     bool first_written) {
+                     bool first_written, bool end_checkpoint) {
   const long every = scene.integrator.output_every;
   const long check_every =
       scene.integrator.check_every > 0 ? scene.integrator.check_every : default_check_every(scene.body_count());
@@ -232,6 +260,64 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   };
 
   RunOutcome outcome;
+  const bool last_on_grid = last_step_on_grid(schedule);
+  const long end_step = control.checkpoint && end_checkpoint
+                            ? end_checkpoint_step(schedule, first, every, check_every, checkpoint_every)
+                            : -1;
+  // outcome for a non-finite value in body bad_body (1-based), named where it went bad.
+  const auto set_non_finite = [&](int bad_body) {
+    outcome.reason = StopReason::non_finite;
+    outcome.failed_body = bad_body;
+    const FramedState state = integrator.framed_state();
+    outcome.detail = state.embedded
+                         ? non_finite_detail(state.x, state.v, bad_body, s.energy, "embedding point", "velocity")
+                         : non_finite_detail(state.q, state.p, bad_body, s.energy);
+  };
+  // Whether the state after step k (finite: the caller checked) passes the run's checks: its
+  // energy and momentum map (into s), the close-encounter floor, then the energy guard (an
+  // encounter also spoils the energy). On a failure, outcome says which.
+  const auto passes_checks = [&](long k) {
+    int bad_body = 0;
+    try {
+      s.energy = integrator.energy();
+      if (std::isfinite(s.energy)) {
+        s.momentum = integrator.momentum_map();
+      } else {
+        bad_body = std::max(1, integrator.body_with_non_finite_energy());
+      }
+    } catch (const InvariantFailure& e) {
+      outcome.reason = StopReason::invariant_failed;
+      outcome.detail = std::string("a library invariant failed: ") + e.what();
+      return false;
+    }
+    if (bad_body != 0) {
+      set_non_finite(bad_body);
+      return false;
+    }
+    s.x = integrator.points();
+    if (encounters.active()) {
+      const std::string detail =
+          integrator.clustered() ? encounters.check(integrator.local_points(), integrator) : encounters.check(s.x, integrator);
+      if (!detail.empty()) {
+        outcome.reason = StopReason::close_encounter;
+        outcome.detail = std::move(detail);
+        return false;
+      }
+    }
+    const auto verdict = guard.check(k, schedule.time(k), s.energy);
+    if (verdict.status == sesi::GuardStatus::energy_error_exceeded) {
+      outcome.reason = StopReason::energy_guard;
+      outcome.detail = "energy error exceeded: |E - E0| = " + format_short(std::abs(s.energy - guard.initial_energy())) +
+                       ", " + format_short(verdict.error) + " times the initial energy scale " +
+                       format_short(guard.scale()) + " (energy_guard = " + format_short(guard.relative()) + ")";
+      return false;
+    }
+    return true;
+  };
+  const auto fail_at = [&](long k) {
+    outcome.failed_step = k;
+    outcome.failed_t = schedule.time(k);
+  };
   // The last state that passed a check, and whether it is a row already. Checks (energy,
   // momentum map, guard, close encounters) run every check_every steps, at every output row, at
   // every checkpoint and at the last step; finiteness after every step. A failure names the step
@@ -240,65 +326,53 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   bool good_written = first_written;
   for (long k = first + 1; k <= schedule.steps; ++k) {
     if (control.interrupted && control.interrupted->load(std::memory_order_relaxed)) {
+      // The run stops after step k - 1 (finite), checked here if it was not: the stop, the
+      // outputs' last row and the checkpoint are all at that one step.
+      const long last = k - 1;
+      const bool unchecked = good.step != last;
+      if (unchecked && !passes_checks(last)) {
+        fail_at(last);
+        break;
+      }
       outcome.reason = StopReason::interrupted;
       outcome.detail = "interrupted by a signal";
-      // The state after step k - 1 (finite; its energy is checked at the resumed run's checks),
-      // with the rows an uninterrupted run has written by then: the stop row comes after.
-      if (control.checkpoint) take_checkpoint(k - 1);
+      // With the rows and statistics an uninterrupted run has by then: the stop row and this
+      // check come after (a longer run need not check this step).
+      if (control.checkpoint) take_checkpoint(last);
+      if (unchecked) {
+        s.step = last;
+        s.t = schedule.time(last);
+        integrator.read(s.q, s.p);
+        s.v = integrator.velocities();
+        recorder.track(s.energy, s.momentum);
+        good_written = false;
+        std::swap(good, s);
+      }
       break;
     }
     const bool regular_row = k % every == 0;
     const bool row = regular_row || k == schedule.steps;
-    // Checkpoints at multiples of checkpoint_every only (not at the last step): they are checked
-    // steps of any run of the scene, however long, so a longer run (sesi resume --t-end) goes on
-    // from the last one as if it had been one run.
-    const bool checkpoint = checkpoint_every > 0 && k % checkpoint_every == 0;
+    // Checkpoints at multiples of checkpoint_every, and at the run's end checkpoint (a step every
+    // longer run checks too), never at a last step that a longer run does not take as it is: so a
+    // longer run (sesi resume --t-end) goes on from any of them as if it had been one run.
+    const bool checkpoint = ((checkpoint_every > 0 && k % checkpoint_every == 0) || k == end_step) &&
+                            (k != schedule.steps || last_on_grid);
     const bool check = row || checkpoint || k % check_every == 0;
-    int bad_body = 0;
     try {
       integrator.step(schedule.time(k - 1), schedule.h(k));
-      bad_body = integrator.first_non_finite_body();
-      if (bad_body == 0 && check) {
-        s.energy = integrator.energy();
-        if (std::isfinite(s.energy)) {
-          s.momentum = integrator.momentum_map();
-        } else {
-          bad_body = std::max(1, integrator.body_with_non_finite_energy());
-        }
-      }
     } catch (const InvariantFailure& e) {
       outcome.reason = StopReason::invariant_failed;
       outcome.detail = std::string("a library invariant failed: ") + e.what();
+      fail_at(k);
+      break;
     }
-    if (bad_body != 0) {
-      outcome.reason = StopReason::non_finite;
-      outcome.failed_body = bad_body;
-      const FramedState state = integrator.framed_state();  // where the value went bad
-      outcome.detail = state.embedded
-                           ? non_finite_detail(state.x, state.v, bad_body, s.energy, "embedding point", "velocity")
-                           : non_finite_detail(state.q, state.p, bad_body, s.energy);
-    } else if (outcome.reason == StopReason::completed && check) {
-      // The close-encounter floor, then the energy guard (an encounter also spoils the energy).
-      s.x = integrator.points();
-      if (encounters.active()) {
-        const std::string detail =
-            integrator.clustered() ? encounters.check(integrator.local_points(), integrator) : encounters.check(s.x, integrator);
-        if (!detail.empty()) {
-          outcome.reason = StopReason::close_encounter;
-          outcome.detail = std::move(detail);
-        }
-      }
-      const auto verdict = guard.check(k, schedule.time(k), s.energy);
-      if (outcome.reason == StopReason::completed && verdict.status == sesi::GuardStatus::energy_error_exceeded) {
-        outcome.reason = StopReason::energy_guard;
-        outcome.detail = "energy error exceeded: |E - E0| = " + format_short(std::abs(s.energy - guard.initial_energy())) +
-                         ", " + format_short(verdict.error) + " times the initial energy scale " +
-                         format_short(guard.scale()) + " (energy_guard = " + format_short(guard.relative()) + ")";
-      }
+    if (const int bad_body = integrator.first_non_finite_body(); bad_body != 0) {
+      set_non_finite(bad_body);
+      fail_at(k);
+      break;
     }
-    if (outcome.reason != StopReason::completed) {
-      outcome.failed_step = k;
-      outcome.failed_t = schedule.time(k);
+    if (check && !passes_checks(k)) {
+      fail_at(k);
       break;
     }
     if (check) {

@@ -43,8 +43,26 @@ void throwing_check_handler(const char* expr, const char* what, const char*, int
 
 void install_check_handler() { sesi::set_check_handler(&throwing_check_handler); }
 
+std::string cut_input(std::string_view text, std::size_t limit) {
+  if (text.size() <= limit) return std::string(text);
+  std::size_t end = limit;
+  // Back to the start of a UTF-8 character (continuation bytes are 10xxxxxx).
+  while (end > 0 && (static_cast<unsigned char>(text[end]) & 0xC0) == 0x80) --end;
+  return std::string(text.substr(0, end)) + "... (" + std::to_string(text.size()) + " bytes)";
+}
+
+std::string cut_quoted(std::string_view message) {
+  const std::size_t first = message.find('\'');
+  if (first == std::string_view::npos) return cut_input(message, max_message_bytes);
+  // toml++ cuts its own messages at some 500 bytes, sometimes before the closing quote.
+  const std::size_t last = message.rfind('\'');
+  const std::size_t end = last == first ? message.size() : last;
+  return std::string(message.substr(0, first + 1)) + cut_input(message.substr(first + 1, end - first - 1)) +
+         std::string(message.substr(end));
+}
+
 void print_error(std::string_view message) {
-  std::string line(message);
+  std::string line = cut_input(message, max_message_bytes);
   for (char& c : line) {
     if (c == '\n' || c == '\r') c = ' ';
   }

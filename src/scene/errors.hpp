@@ -6,6 +6,7 @@
 ///      far are kept, marked incomplete;
 ///   130 interrupted (SIGINT/SIGTERM): as 3, with the reason "interrupted".
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -54,7 +55,22 @@ class InvariantFailure : public std::runtime_error {
 /// Route SESI_CHECK failures to InvariantFailure.
 void install_check_handler();
 
-/// Print "sesi: error: MESSAGE" as one line (newlines in MESSAGE become spaces).
+/// How much of a piece of the user's input a message quotes (cut_input).
+inline constexpr std::size_t max_quoted_bytes = 80;
+/// How long a printed error line may be (print_error): a message and a few quoted pieces fit.
+inline constexpr std::size_t max_message_bytes = 2000;
+
+/// A piece of the user's input (a key, a string, a value) as a message quotes it: itself when it
+/// has at most `limit` bytes, else its first `limit` bytes (not splitting a UTF-8 character)
+/// and "... (N bytes)", so that a 10 MB key never comes back whole on stderr.
+std::string cut_input(std::string_view text, std::size_t limit = max_quoted_bytes);
+
+/// A message from a library (toml++) that quotes input between single quotes: what lies
+/// between its first and its last quote (or after its only one) cut with cut_input.
+std::string cut_quoted(std::string_view message);
+
+/// Print "sesi: error: MESSAGE" as one line (newlines in MESSAGE become spaces), cut with
+/// cut_input to max_message_bytes should a message quote input uncut.
 void print_error(std::string_view message);
 
 /// Format a double for messages: the shortest form that reads back exactly.

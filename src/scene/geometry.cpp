@@ -96,6 +96,11 @@ double Geometry::distance(const Vector& x, const Vector& y) const {
       chart_);
 }
 
+double Geometry::radii_from_origin(const Vector& x) const {
+  if (space_.kind != SpaceKind::hyperbolic) return 0.0;
+  return std::asinh(x.head(space_.dim).norm() / space_.radius);
+}
+
 std::vector<std::pair<int, int>> Geometry::close_pairs(const Eigen::MatrixXd& X, double reach, bool antipodal) const {
   std::vector<std::pair<int, int>> out;
   const int n = static_cast<int>(X.cols());

@@ -49,6 +49,9 @@ class Geometry {
   Vector velocity(const Vector& q, const Vector& p, double m) const;
   double kinetic_energy(const Vector& q, const Vector& p, double m) const;
   double distance(const Vector& x, const Vector& y) const;
+  /// H^n: the distance of x from the origin in radii, asinh(|x_1..x_n| / R) (no cancellation);
+  /// 0 on S^n and E^n.
+  double radii_from_origin(const Vector& x) const;
 
   /// The pairs (i, j), i < j, of columns of X (embedding points) at distance < reach, in
   /// O(N log N) through the library's neighbour index; with antipodal (S^n only), the pairs

@@ -198,7 +198,7 @@ class TableReader {
       if (std::find(allowed.begin(), allowed.end(), key.str()) != allowed.end()) continue;
       const std::string name = unshield(key.str());
       const std::string hint = did_you_mean(name, allowed);
-      throw InputError(origin_of(key.source()), key_path(name),
+      throw InputError(origin_of(key.source()), key_path(cut_input(name)),
                        "unknown key in " + std::string(what) +
                            (hint.empty() ? " (expected " + one_of(allowed) + ")" : hint));
     }
@@ -336,6 +336,7 @@ class SceneReader {
     read_bodies();
     read_potentials();
     read_integrator();
+    check_far_reach();  // (beyond it, the distances check_bodies_apart measures mean nothing)
     check_bodies_apart();
     read_exact();
     return std::move(scene_);
@@ -348,7 +349,7 @@ class SceneReader {
     if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos ||
         name.find('\0') != std::string::npos) {
       root_.fail("name", "expected a non-empty name without '/' (it names the output directory), got '" +
-                             name + "'");
+                             cut_input(name) + "'");
     }
     return name;
   }
@@ -371,7 +372,7 @@ class SceneReader {
     } else if (kind == "euclidean") {
       scene_.space.kind = SpaceKind::euclidean;
     } else {
-      space.fail("kind", "unknown space kind '" + kind + "'" + did_you_mean(kind, space_kinds) +
+      space.fail("kind", "unknown space kind '" + cut_input(kind) + "'" + did_you_mean(kind, space_kinds) +
                              " (expected " + one_of(space_kinds) + ")");
     }
     const bool euclidean = scene_.space.kind == SpaceKind::euclidean;
@@ -388,9 +389,7 @@ class SceneReader {
     scene_.space.dim = static_cast<int>(dim);
     if (!euclidean) {
       scene_.space.radius = space.number_or("radius", 1.0, "a finite number > 0");
-      if (!(scene_.space.radius > 0.0)) {
-        space.fail("radius", "expected a finite number > 0, got " + format_number(scene_.space.radius));
-      }
+      check_radius(scene_.space.radius, space.origin_of("radius"), space.key_path("radius"));
     }
     geometry_.emplace(scene_.space);
   }
@@ -409,7 +408,7 @@ class SceneReader {
     const Geometry& g = *geometry_;
     Body out;
     out.mass = body.number("mass", "a finite number > 0");
-    if (!(out.mass > 0.0)) body.fail("mass", "expected a finite number > 0, got " + format_number(out.mass));
+    check_mass(out.mass, body.origin_of("mass"), body.key_path("mass"));
 
     const bool chart = body.has("q"), embedded = body.has("x");
     if (chart && embedded) {
@@ -516,9 +515,7 @@ class SceneReader {
       term.allow_only(chord_well_keys, "a chord-well potential");
       ChordWellSpec spec{term.number("theta0", "a finite angle in [0, pi]"),
                          term.number_or("strength", 2.0, "a finite number")};
-      if (spec.theta0 < 0.0 || spec.theta0 > std::numbers::pi) {
-        term.fail("theta0", "expected an angle in [0, pi], got " + format_number(spec.theta0));
-      }
+      check_potential(spec, place(term));
       return spec;
     }
     if (kind == "cotangent-gravity") {
@@ -541,7 +538,7 @@ class SceneReader {
       term.allow_only(harmonic_pair_keys, "a harmonic-pair potential");
       HarmonicPairSpec spec{term.number_or("k", 1.0, "a finite number"),
                             term.number_or("d0", 0.0, "a finite distance >= 0")};
-      if (spec.d0 < 0.0) term.fail("d0", "expected a finite distance >= 0, got " + format_number(spec.d0));
+      check_potential(spec, place(term));
       return spec;
     }
     if (kind == "lennard-jones") {
@@ -549,13 +546,16 @@ class SceneReader {
       LennardJonesSpec spec{term.number_or("epsilon", 1.0, "a finite number >= 0"),
                             term.number_or("sigma", 1.0, "a finite number > 0"), 0.0, min_distance(term)};
       spec.cutoff = term.number_or("cutoff", 2.5 * spec.sigma, "a finite distance > 0");
-      if (spec.epsilon < 0.0) term.fail("epsilon", "expected a finite number >= 0, got " + format_number(spec.epsilon));
-      if (!(spec.sigma > 0.0)) term.fail("sigma", "expected a finite number > 0, got " + format_number(spec.sigma));
-      if (!(spec.cutoff > 0.0)) term.fail("cutoff", "expected a finite distance > 0, got " + format_number(spec.cutoff));
+      check_potential(spec, place(term));
       return spec;
     }
-    term.fail("kind", "unknown potential kind '" + kind + "'" + did_you_mean(kind, potential_kinds) +
+    term.fail("kind", "unknown potential kind '" + cut_input(kind) + "'" + did_you_mean(kind, potential_kinds) +
                           " (expected " + one_of(potential_kinds) + ")");
+  }
+
+  /// Where check_potential's failures point: the key in the term's table.
+  static KeyPlace place(const TableReader& term) {
+    return [&term](std::string_view key) { return std::pair{term.origin_of(key), term.key_path(key)}; };
   }
 
   /// A singular term's close-encounter floor: min_distance, or -1 for the library's default.
@@ -714,6 +714,24 @@ class SceneReader {
     }
   }
 
+  /// H^n, n >= 2: bodies and force centres must lie where their coordinates resolve them
+  /// (check_far_resolution, validate.hpp).
+  void check_far_reach() const {
+    if (scene_.space.kind != SpaceKind::hyperbolic || scene_.dim() < 2) return;
+    const Geometry& g = *geometry_;
+    for (int b = 0; b < scene_.body_count(); ++b) {
+      check_far_resolution(g.radii_from_origin(g.embed(scene_.bodies[static_cast<std::size_t>(b)].q)), scene_.dim(),
+                           provenance_.bodies[static_cast<std::size_t>(b)],
+                           provenance_.body_position[static_cast<std::size_t>(b)]);
+    }
+    for (std::size_t k = 0; k < scene_.potentials.size(); ++k) {
+      if (const auto* central = std::get_if<CentralCotangentSpec>(&scene_.potentials[k])) {
+        check_far_resolution(g.radii_from_origin(central->center), scene_.dim(), provenance_.potentials[k],
+                             "potential[" + std::to_string(k + 1) + "].center");
+      }
+    }
+  }
+
   /// A body starting below a singular term's close-encounter floor would stop the run at its
   /// first step (exit 3); it is bad input instead.
   void check_floor(const PotentialSpec& spec, int b, double d, const std::string& other,
@@ -736,7 +754,7 @@ class SceneReader {
     if (!root_.has("exact")) return;
     const std::string exact = root_.string("exact", "a string");
     if (exact != "paper") {
-      root_.fail("exact", "unknown exact solution '" + exact + "'" + did_you_mean(exact, exact_solutions) +
+      root_.fail("exact", "unknown exact solution '" + cut_input(exact) + "'" + did_you_mean(exact, exact_solutions) +
                               " (expected " + one_of(exact_solutions) + ")");
     }
     if (const std::string mismatch = paper_scene_mismatch(scene_); !mismatch.empty()) {
@@ -792,7 +810,7 @@ Scene read_scene_text(std::string_view text, const std::string& path) {
   } catch (const toml::parse_error& e) {
     const auto& where = e.source().begin;
     throw InputError(Origin{path, static_cast<int>(where.line), static_cast<int>(where.column)}, "",
-                     "TOML syntax error: " + unshield(e.description()));
+                     "TOML syntax error: " + cut_quoted(unshield(e.description())));
   }
   return SceneReader(root, path).read();
 }

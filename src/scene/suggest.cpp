@@ -25,6 +25,9 @@ std::string nearest(std::string_view word, std::span<const std::string_view> can
   std::string best;
   std::size_t best_distance = allowed + 1;
   for (std::string_view c : candidates) {
+    // The distance is at least the difference of the lengths: a 10 MB word costs nothing.
+    const std::size_t gap = word.size() > c.size() ? word.size() - c.size() : c.size() - word.size();
+    if (gap >= best_distance) continue;
     const std::size_t d = edit_distance(word, c);
     if (d < best_distance) {
       best_distance = d;

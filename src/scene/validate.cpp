@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -15,7 +16,7 @@ namespace sesi::program {
 void check_method(std::string_view method, const Origin& origin, std::string_view key) {
   if (is_method(method)) return;
   throw InputError(origin, key,
-                   "unknown method '" + std::string(method) + "'" +
+                   "unknown method '" + cut_input(method) + "'" +
                        did_you_mean(method, method_names()) + " (expected " +
                        one_of(method_names()) + ")");
 }
@@ -24,7 +25,7 @@ void check_method_or_auto(std::string_view method, const Origin& origin, std::st
   if (method == "auto") return;
   if (is_method(method)) return;
   throw InputError(origin, key,
-                   "unknown method '" + std::string(method) + "'" +
+                   "unknown method '" + cut_input(method) + "'" +
                        did_you_mean(method, method_names()) + " (expected \"auto\" or " +
                        one_of(method_names()) + ")");
 }
@@ -98,7 +99,7 @@ TrajectoryFormat parse_trajectory_format(std::string_view name, const Origin& or
   }
   const std::vector<std::string_view> names{"csv", "h5md"};
   throw InputError(origin, key,
-                   "unknown trajectory format '" + std::string(name) + "'" + did_you_mean(name, names) +
+                   "unknown trajectory format '" + cut_input(name) + "'" + did_you_mean(name, names) +
                        " (expected " + one_of(names) + ")");
 }
 
@@ -151,6 +152,99 @@ long step_count(double t_end, double dt) {
     return static_cast<long>(nearest_whole);
   }
   return static_cast<long>(std::ceil(ratio));
+}
+
+void check_mass(double mass, const Origin& origin, std::string_view key) {
+  if (!(mass > 0.0) || !std::isfinite(mass)) {
+    throw InputError(origin, key, "expected a finite number > 0, got " + format_number(mass));
+  }
+}
+
+void check_radius(double radius, const Origin& origin, std::string_view key) {
+  if (!(radius > 0.0) || !std::isfinite(radius)) {
+    throw InputError(origin, key, "expected a finite number > 0, got " + format_number(radius));
+  }
+}
+
+void check_potential(const PotentialSpec& spec, const KeyPlace& place) {
+  const auto fail = [&](std::string_view key, const std::string& message) {
+    const auto [origin, path] = place(key);
+    throw InputError(origin, path, message);
+  };
+  const auto finite = [&](std::string_view key, double value) {
+    if (!std::isfinite(value)) fail(key, "expected a finite number, got " + format_number(value));
+  };
+  const auto floor = [&](double d) {
+    if (!(d < 0.0)) {
+      const auto [origin, path] = place("min_distance");
+      check_min_distance(d, origin, path);
+    }
+  };
+  if (const auto* s = std::get_if<ChordWellSpec>(&spec)) {
+    if (!(s->theta0 >= 0.0 && s->theta0 <= std::numbers::pi)) {
+      fail("theta0", "expected an angle in [0, pi], got " + format_number(s->theta0));
+    }
+    finite("strength", s->strength);
+  } else if (const auto* s = std::get_if<CotangentGravitySpec>(&spec)) {
+    finite("G", s->G);
+    floor(s->min_distance);
+  } else if (const auto* s = std::get_if<CentralCotangentSpec>(&spec)) {
+    finite("k", s->k);
+    for (Eigen::Index i = 0; i < s->center.size(); ++i) finite("center", s->center[i]);
+    floor(s->min_distance);
+  } else if (const auto* s = std::get_if<HarmonicPairSpec>(&spec)) {
+    finite("k", s->k);
+    if (!(s->d0 >= 0.0) || !std::isfinite(s->d0)) fail("d0", "expected a finite distance >= 0, got " + format_number(s->d0));
+  } else if (const auto* s = std::get_if<LennardJonesSpec>(&spec)) {
+    if (!(s->epsilon >= 0.0) || !std::isfinite(s->epsilon)) {
+      fail("epsilon", "expected a finite number >= 0, got " + format_number(s->epsilon));
+    }
+    if (!(s->sigma > 0.0) || !std::isfinite(s->sigma)) fail("sigma", "expected a finite number > 0, got " + format_number(s->sigma));
+    if (!(s->cutoff > 0.0) || !std::isfinite(s->cutoff)) {
+      fail("cutoff", "expected a finite distance > 0, got " + format_number(s->cutoff));
+    }
+    floor(s->min_distance);
+  }
+}
+
+double far_resolution(double radii) { return std::numeric_limits<double>::epsilon() * std::sinh(radii); }
+
+void check_far_resolution(double radii, int dim, const Origin& origin, std::string_view key) {
+  const double resolution = far_resolution(radii);
+  if (!(resolution > far_resolution_limit)) return;
+  const double reach = std::asinh(far_resolution_limit / std::numeric_limits<double>::epsilon());
+  throw InputError(origin, key,
+                   "at " + format_short(radii) + " radii from the origin of H^" + std::to_string(dim) +
+                       ", coordinates resolve a point only to eps sinh(r/R) = " + format_short(resolution) +
+                       " radii, too coarse to place bodies (at most " + format_number(far_resolution_limit) +
+                       ", within " + format_short(reach) +
+                       " radii); move the scene nearer the origin by an isometry, which changes nothing else");
+}
+
+void check_scene_model(const Scene& scene, const Origin& origin) {
+  if (scene.space.dim < 1) throw InputError(origin, "space.dim", "expected an integer >= 1, got " + std::to_string(scene.space.dim));
+  if (scene.space.kind != SpaceKind::euclidean) check_radius(scene.space.radius, origin, "space.radius");
+  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+    check_mass(scene.bodies[b].mass, origin, "bodies[" + std::to_string(b + 1) + "].mass");
+  }
+  for (std::size_t k = 0; k < scene.potentials.size(); ++k) {
+    const std::string term = "potential[" + std::to_string(k + 1) + "].";
+    check_potential(scene.potentials[k],
+                    [&](std::string_view key) { return std::pair{origin, term + std::string(key)}; });
+  }
+  const IntegratorSpec& in = scene.integrator;
+  check_method(in.method, origin, "integrator.method");
+  if (!in.dt || !in.t_end) throw InputError(origin, "integrator", "missing dt or t_end");
+  check_dt(*in.dt, origin, "integrator.dt");
+  check_t_end(*in.t_end, origin, "integrator.t_end");
+  check_step_count(*in.t_end, *in.dt, origin, "integrator");
+  check_output_every(in.output_every, origin, "integrator.output_every");
+  check_threads(in.threads, origin, "integrator.threads");
+  if (in.check_every != 0) check_check_every(in.check_every, origin, "integrator.check_every");  // 0: default
+  if (in.checkpoint_every != 0) check_checkpoint_every(in.checkpoint_every, origin, "integrator.checkpoint_every");
+  check_neighbour_skin(in.neighbour_skin, origin, "integrator.neighbour_skin");
+  if (in.energy_guard && *in.energy_guard != 0.0) check_energy_guard(*in.energy_guard, origin, "integrator.energy_guard");
+  if (in.tolerance) check_tolerance(*in.tolerance, origin, "integrator.tolerance");
 }
 
 }  // namespace sesi::program

@@ -3,8 +3,10 @@
 /// Rules on values shared by the scene reader and the command-line overrides. Each throws
 /// InputError naming the origin and key when the value breaks the rule.
 
+#include <functional>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "errors.hpp"
 #include "scene.hpp"
@@ -56,5 +58,32 @@ double singular_gap(const PotentialSpec& spec, SpaceKind kind, double radius, do
 /// The number of steps of a run: ceil(t_end / |dt|) up to round-off (the last step is
 /// shortened to end exactly at t_end).
 long step_count(double t_end, double dt);
+
+/// mass of a body: a finite number > 0.
+void check_mass(double mass, const Origin& origin, std::string_view key);
+/// radius of a curved space: a finite number > 0.
+void check_radius(double radius, const Origin& origin, std::string_view key);
+/// Where a failed check of one key of a table points: its origin and key path.
+using KeyPlace = std::function<std::pair<Origin, std::string>(std::string_view key)>;
+/// A potential term's parameters: all finite; theta0 in [0, pi]; d0 and epsilon >= 0; sigma and
+/// cutoff > 0; min_distance as check_min_distance (< 0: the default).
+void check_potential(const PotentialSpec& spec, const KeyPlace& place);
+/// H^n, n >= 2: the coordinates of a point at distance r from the origin (world x, or chart q about
+/// the origin) resolve it across the line of sight only to eps sinh(r/R) radii, their rounding
+/// (8e-6 at 25 radii, 1e-3 at 30, 0.18 at 35, 6e5 at 50), and its velocity likewise. Bodies or a
+/// force centre given farther out than where that passes this (32.1 radii) would have their
+/// separations, distances to the centre and directions of motion known to fewer than two digits:
+/// the scene is refused (the geodesic methods' limit, geodesic_reach_limit, is the same resolution
+/// of their e^(2r/R) loss). docs/stability.md, "Far from the origin".
+inline constexpr double far_resolution_limit = 1e-2;
+/// eps sinh(radii): how well coordinates resolve a point `radii` = r/R from the origin of H^n.
+double far_resolution(double radii);
+/// Throws InputError at origin and key when far_resolution(radii) > far_resolution_limit, for a
+/// body or force centre of a scene on H^dim (dim >= 2).
+void check_far_resolution(double radii, int dim, const Origin& origin, std::string_view key);
+/// A scene model that did not come from a scene file (a checkpoint's), by the rules the scene
+/// reader applies to one: the radius, the masses, the potentials and the integrator's settings
+/// (keys named as in a scene file, all at origin).
+void check_scene_model(const Scene& scene, const Origin& origin);
 
 }  // namespace sesi::program

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -89,15 +90,19 @@ std::optional<long> as_index(std::string_view part) {
   return index;
 }
 
-/// The node at the key's path, or nullptr where the last part is missing from its table. A
-/// missing table on the way is made when `create`; otherwise, and for a bad array index,
-/// InputError.
-toml::node* locate(toml::table& root, const VaryTable& vary, bool create) {
+/// The node at the path of the key's first `count` parts (all of them by default), or nullptr
+/// where the last of them is missing from its table. A missing table on the way is made when
+/// `create`; otherwise, and for a bad array index, InputError. Nothing is copied: a sweep's
+/// variants are built in time linear in their number.
+toml::node* locate(toml::table& root, const VaryTable& vary, bool create,
+                   std::size_t count = std::numeric_limits<std::size_t>::max()) {
+  count = std::min(count, vary.parts.size());
   toml::node* node = &root;
+  if (count == 0) return node;
   std::string path;
-  for (std::size_t i = 0; i < vary.parts.size(); ++i) {
+  for (std::size_t i = 0; i < count; ++i) {
     const std::string& part = vary.parts[i];
-    const bool last = i + 1 == vary.parts.size();
+    const bool last = i + 1 == count;
     toml::node* next = nullptr;
     if (toml::table* table = node->as_table()) {
       next = table->get(part);
@@ -108,18 +113,20 @@ toml::node* locate(toml::table& root, const VaryTable& vary, bool create) {
     } else if (toml::array* array = node->as_array()) {
       const std::optional<long> index = as_index(part);
       if (!index) {
-        throw InputError(vary.origin, "key", "'" + vary.key + "': " + (path.empty() ? "the scene" : path) +
-                                                 " is an array; expected an index, got '" + part + "'");
+        throw InputError(vary.origin, "key", "'" + cut_input(vary.key) + "': " +
+                                                 (path.empty() ? "the scene" : cut_input(path)) +
+                                                 " is an array; expected an index, got '" + cut_input(part) + "'");
       }
       if (*index >= static_cast<long>(array->size())) {
-        throw InputError(vary.origin, "key", "'" + vary.key + "': " + path + " has " +
+        throw InputError(vary.origin, "key", "'" + cut_input(vary.key) + "': " + cut_input(path) + " has " +
                                                  std::to_string(array->size()) + " entries (0 to " +
                                                  std::to_string(static_cast<long>(array->size()) - 1) +
-                                                 "), no entry " + part);
+                                                 "), no entry " + cut_input(part));
       }
       next = array->get(static_cast<std::size_t>(*index));
     } else {
-      throw InputError(vary.origin, "key", "'" + vary.key + "': " + path + " is a value, not a table or array");
+      throw InputError(vary.origin, "key",
+                       "'" + cut_input(vary.key) + "': " + cut_input(path) + " is a value, not a table or array");
     }
     path += (path.empty() ? "" : ".") + part;
     if (last) return next;
@@ -131,28 +138,19 @@ toml::node* locate(toml::table& root, const VaryTable& vary, bool create) {
 
 /// Put value at the key's path in root (replacing the node there, or adding it to its table).
 void assign(toml::table& root, const VaryTable& vary, const toml::node& value) {
-  if (toml::node* node = locate(root, vary, true)) {
-    // Replace in place through the parent: find it again one level up.
-    VaryTable parent = vary;
-    parent.parts.pop_back();
-    toml::node* up = parent.parts.empty() ? &root : locate(root, parent, true);
-    if (toml::table* table = up->as_table()) {
-      table->insert_or_assign(vary.parts.back(), value);
-    } else if (toml::array* array = up->as_array()) {
-      const auto at = array->begin() + static_cast<std::ptrdiff_t>(*as_index(vary.parts.back()));
-      array->replace(at, value);
-    }
-    (void)node;
-    return;
-  }
-  VaryTable parent = vary;
-  parent.parts.pop_back();
-  toml::node* up = parent.parts.empty() ? &root : locate(root, parent, true);
+  const bool present = locate(root, vary, true) != nullptr;
+  // The parent, one level up (the path's tables exist now).
+  toml::node* up = locate(root, vary, true, vary.parts.size() - 1);
   if (toml::table* table = up ? up->as_table() : nullptr) {
     table->insert_or_assign(vary.parts.back(), value);
     return;
   }
-  throw InputError(vary.origin, "key", "'" + vary.key + "': no such place in the scene");
+  if (toml::array* array = up ? up->as_array() : nullptr; array && present) {
+    const auto at = array->begin() + static_cast<std::ptrdiff_t>(*as_index(vary.parts.back()));
+    array->replace(at, value);
+    return;
+  }
+  throw InputError(vary.origin, "key", "'" + cut_input(vary.key) + "': no such place in the scene");
 }
 
 bool numeric(const toml::node& node) { return node.is_floating_point() || node.is_integer(); }
@@ -245,7 +243,7 @@ void perturb(toml::table& root, const VaryTable& vary, long copy) {
   toml::node* node = locate(root, vary, false);
   if (!node || !(numeric(*node) || numbers_of(node))) {
     throw InputError(vary.origin, "perturb",
-                     "'" + vary.key + "' must be a number or an array of numbers in the scene to be perturbed" +
+                     "'" + cut_input(vary.key) + "' must be a number or an array of numbers in the scene to be perturbed" +
                          (node ? "" : " (it is not in the scene)"));
   }
   if (numeric(*node)) {
@@ -284,13 +282,20 @@ void perturb(toml::table& root, const VaryTable& vary, long copy) {
   assign(root, vary, array_of(values));
 }
 
+/// The cap on runs and why, for messages: "N runs in one sweep (...)".
+std::string cap_reason() {
+  return std::to_string(max_sweep_runs) +
+         " runs in one sweep (each run is a process and a folder in runs/, and every variant is built, "
+         "checked and held in memory before the first run starts); split it into several sweeps";
+}
+
 VaryTable read_vary(const toml::table& table, const fs::path& file, std::size_t number) {
   VaryTable vary;
   vary.origin = origin_of(file, table.source());
   const std::string name = "vary[" + std::to_string(number) + "]";
   for (const auto& [key, node] : table) {
     if (std::find(vary_keys.begin(), vary_keys.end(), key.str()) == vary_keys.end()) {
-      throw InputError(origin_of(file, key.source()), name + "." + std::string(key.str()),
+      throw InputError(origin_of(file, key.source()), name + "." + cut_input(key.str()),
                        "unknown key" + did_you_mean(key.str(), vary_keys) + " (keys: " + one_of(vary_keys) + ")");
     }
   }
@@ -307,12 +312,15 @@ VaryTable read_vary(const toml::table& table, const fs::path& file, std::size_t 
     const std::size_t dot = rest.find('.');
     vary.parts.emplace_back(rest.substr(0, dot));
     if (vary.parts.back().empty()) {
-      throw InputError(vary.origin, name + ".key", "'" + vary.key + "' has an empty part; expected e.g. \"bodies.0.v\"");
+      throw InputError(vary.origin, name + ".key",
+                       "'" + cut_input(vary.key) + "' has an empty part; expected e.g. \"bodies.0.v\"");
     }
     if (dot == std::string_view::npos) break;
     rest.remove_prefix(dot + 1);
   }
-  if (vary.parts.size() > 8) throw InputError(vary.origin, name + ".key", "'" + vary.key + "' has too many parts");
+  if (vary.parts.size() > 8) {
+    throw InputError(vary.origin, name + ".key", "'" + cut_input(vary.key) + "' has too many parts");
+  }
   const int kinds = table.contains("values") + table.contains("range") + table.contains("perturb");
   if (kinds != 1) {
     throw InputError(vary.origin, name, kinds > 1 ? "give one of values, range and perturb, not several"
@@ -332,7 +340,11 @@ VaryTable read_vary(const toml::table& table, const fs::path& file, std::size_t 
     }
     const double start = number_of(*items->get(0)), stop = number_of(*items->get(1));
     const std::int64_t count = items->get(2)->as_integer()->get();
-    if (!std::isfinite(start) || !std::isfinite(stop) || count < 2 || count > max_sweep_runs) throw bad();
+    if (!std::isfinite(start) || !std::isfinite(stop) || count < 2) throw bad();
+    if (count > max_sweep_runs) {
+      throw InputError(origin_of(file, range->source()), name + ".range",
+                       "COUNT = " + std::to_string(count) + " is over the cap of " + cap_reason());
+    }
     for (std::int64_t i = 0; i < count; ++i) {
       vary.values.push_back(i + 1 == count ? stop : start + static_cast<double>(i) * (stop - start) / static_cast<double>(count - 1));
     }
@@ -353,7 +365,7 @@ VaryTable read_vary(const toml::table& table, const fs::path& file, std::size_t 
     const toml::array* values = table["values"].as_array();
     if (!values || values->empty()) {
       throw InputError(origin_of(file, table.get("values")->source()), name + ".values",
-                       "expected a non-empty array of values for " + vary.key);
+                       "expected a non-empty array of values for " + cut_input(vary.key));
     }
     vary.values = *values;
     return vary;
@@ -369,7 +381,11 @@ VaryTable read_vary(const toml::table& table, const fs::path& file, std::size_t 
   if (!count->is_integer() || count->as_integer()->get() < 1) {
     throw InputError(origin_of(file, count->source()), name + ".count", "expected an integer >= 1");
   }
-  vary.count = static_cast<long>(std::min<std::int64_t>(count->as_integer()->get(), max_sweep_runs + 1));
+  if (count->as_integer()->get() > max_sweep_runs) {
+    throw InputError(origin_of(file, count->source()), name + ".count",
+                     std::to_string(count->as_integer()->get()) + " is over the cap of " + cap_reason());
+  }
+  vary.count = static_cast<long>(count->as_integer()->get());
   if (const toml::node* seed = table.get("seed")) {
     if (!seed->is_integer() || seed->as_integer()->get() < 0) {
       throw InputError(origin_of(file, seed->source()), name + ".seed", "expected an integer >= 0");
@@ -398,7 +414,7 @@ Sweep read_sweep_file(const fs::path& path) {
   const toml::table root = parse_toml(read_text(path, Origin{}, "SWEEP", "sweep file"), file);
   for (const auto& [key, node] : root) {
     if (std::find(top_keys.begin(), top_keys.end(), key.str()) == top_keys.end()) {
-      throw InputError(origin_of(path, key.source()), key.str(),
+      throw InputError(origin_of(path, key.source()), cut_input(key.str()),
                        "unknown key" + did_you_mean(key.str(), top_keys) + " (keys: " + one_of(top_keys) + ")");
     }
   }
@@ -426,13 +442,16 @@ Sweep read_sweep_file(const fs::path& path) {
     varies.push_back(read_vary(*tables->get(i)->as_table(), path, i));
     for (std::size_t j = 0; j + 1 < varies.size(); ++j) {
       if (varies[j].key == varies.back().key) {
-        throw InputError(varies.back().origin, "key", "'" + varies.back().key + "' is varied twice");
+        throw InputError(varies.back().origin, "key", "'" + cut_input(varies.back().key) + "' is varied twice");
       }
     }
     const long length = varies.back().length();
     if (total > max_sweep_runs / length) {
       throw InputError(varies.back().origin, "vary",
-                       "more than " + std::to_string(max_sweep_runs) + " runs in the sweep; split it");
+                       "the [[vary]] tables make " + (i == 0 ? std::to_string(length) + " runs"
+                                                             : std::to_string(total) + " x " + std::to_string(length) +
+                                                                   " runs so far") +
+                           ", over the cap of " + cap_reason());
     }
     total *= length;
   }
@@ -484,7 +503,7 @@ Sweep read_sweep_file(const fs::path& path) {
     } catch (const InputError& e) {
       std::string values;
       for (std::size_t c = 0; c < columns.size(); ++c) {
-        values += (c ? ", " : "") + columns[c] + " = " + variant.values[c];
+        values += (c ? ", " : "") + cut_input(columns[c] + " = " + variant.values[c]);
       }
       throw InputError(varies.size() == 1 ? varies.front().origin : Origin{file}, "",
                        "run " + label + " (" + values + ") is not a valid scene: " +

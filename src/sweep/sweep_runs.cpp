@@ -12,10 +12,12 @@
 #include <stdexcept>
 #include <string_view>
 #include <system_error>
+#include <utility>
 
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -33,15 +35,20 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::string_view marker_name = "sweep-run.toml";
+/// In a run's staging directory while the run goes: "PID START HOST", the run's process id, its
+/// start time (field 22 of /proc/PID/stat, so that a reused pid is not taken for the run) and
+/// the host. The sweep holds an flock on it from before the run starts, and the run inherits it,
+/// so it stays locked while either lives.
+constexpr std::string_view staging_marker_name = ".sesi-sweep-staging";
 constexpr std::string_view csv_name = "sweep.csv";
 constexpr std::string_view csv_header_start = "index,";
 
 /// What a sweep writes into a run's directory; a run directory holding anything else is not
 /// replaced (nor is a folder without the marker).
 bool is_run_file(std::string_view name) {
-  static constexpr std::array<std::string_view, 9> names = {
+  static constexpr std::array<std::string_view, 10> names = {
       "scene.toml", "log.txt", marker_name, "trajectory.csv", "trajectory.h5", "diagnostics.csv",
-      "exact.csv", "summary.json", "checkpoint"};
+      "exact.csv", "summary.json", "checkpoint", "sesi-manifest.txt"};  // the last: sesi run's (output_dir.cpp)
   return std::find(names.begin(), names.end(), name) != names.end();
 }
 
@@ -54,7 +61,7 @@ bool is_staging_entry(const fs::path& path, int depth = 0) {
   const fs::file_status status = fs::symlink_status(path, ec);
   if (fs::is_regular_file(status)) {
     const std::string base = name.ends_with(".tmp") ? name.substr(0, name.size() - 4) : name;
-    return is_run_file(base) || name == ".sesi-staging" || name == ".out.sesi-lock" || name == ".sesi-sweep-staging";
+    return is_run_file(base) || name == ".sesi-staging" || name == ".out.sesi-lock" || name == staging_marker_name;
   }
   if (!fs::is_directory(status) || depth > 0) return false;
   // out/ or its staging directory, or old/: a replaced run moved aside
@@ -145,6 +152,56 @@ fs::path self_exe() {
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (ec) throw std::runtime_error("cannot find the sesi program (/proc/self/exe): " + ec.message());
   return exe;
+}
+
+/// A process's start time (clock ticks after boot, field 22 of /proc/PID/stat); 0 if unknown or
+/// if it has ended (a zombie, which an orphan stays until something reaps it).
+unsigned long long start_time(long pid) {
+  const std::string stat = read_file("/proc/" + std::to_string(pid) + "/stat");
+  const std::size_t paren = stat.rfind(')');  // the command name may hold spaces and ')'
+  if (paren == std::string::npos) return 0;
+  std::istringstream fields(stat.substr(paren + 1));
+  std::string field;
+  for (int k = 3; k <= 22 && fields >> field; ++k) {
+    if (k == 3 && (field == "Z" || field == "X" || field == "x")) return 0;
+    if (k == 22) return std::strtoull(field.c_str(), nullptr, 10);
+  }
+  return 0;
+}
+
+/// What a staging directory's marker says about its run.
+struct StagingOwner {
+  bool live = false;    ///< its run (or the sweep that started it) is still going here
+  bool foreign = false; ///< it was made on another host, where this process cannot look
+  long pid = 0;
+  std::string host;
+};
+
+StagingOwner staging_owner(const fs::path& staging) {
+  StagingOwner owner;
+  const fs::path marker = staging / staging_marker_name;
+  const int fd = ::open(marker.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) return owner;  // no marker: an older sweep's folder, or one killed before its run started
+  if (::flock(fd, LOCK_SH | LOCK_NB) != 0) {
+    owner.live = errno == EWOULDBLOCK;  // held by the sweep or by the run, which inherited it
+  } else {
+    ::flock(fd, LOCK_UN);
+  }
+  ::close(fd);
+  std::istringstream in(read_file(marker));
+  unsigned long long start = 0;
+  in >> owner.pid >> start >> owner.host;
+  if (!owner.host.empty() && owner.host != host_name()) {
+    owner.foreign = !owner.live;
+    return owner;
+  }
+  // The lock alone fails where flock is emulated per process (NFS): a live pid with the same
+  // start time is the run too.
+  if (owner.pid > 0 && (::kill(static_cast<pid_t>(owner.pid), 0) == 0 || errno == EPERM) && start != 0 &&
+      start_time(owner.pid) == start) {
+    owner.live = true;
+  }
+  return owner;
 }
 
 /// mkdtemp with the usual permissions (mkdtemp makes it 0700).
@@ -259,11 +316,31 @@ SweepDir::SweepDir(fs::path dir, const Sweep& sweep) : dir_(std::move(dir)), swe
   const long total = static_cast<long>(sweep_.variants.size());
   done_.assign(sweep_.variants.size(), std::nullopt);
   std::vector<std::string> removed, left;
+  // First the runs of a killed sweep that still go (each is its own process): refused before
+  // anything is removed, so that their folders are never taken from under them.
+  for (const fs::directory_entry& entry : fs::directory_iterator(runs, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::error_code item;
+    if (!name.starts_with(".") || name.find(".sweep-") == std::string::npos || entry.is_symlink(item) ||
+        !entry.is_directory(item)) {
+      continue;
+    }
+    const StagingOwner owner = staging_owner(entry.path());
+    if (owner.live) {
+      const std::string run = name.substr(1, name.find(".sweep-") - 1);
+      throw InputError(origin, key,
+                       "run " + run + " of an earlier sweep is still running in runs/" + name +
+                           (owner.pid > 0 ? " (pid " + std::to_string(owner.pid) + ")" : std::string()) +
+                           "; wait for it to end or stop it, then run the sweep again");
+    }
+  }
+  if (ec) throw InputError(origin, key, "cannot read runs/: " + ec.message());
   for (const fs::directory_entry& entry : fs::directory_iterator(runs, ec)) {
     const std::string name = entry.path().filename().string();
     if (name.starts_with(".") && name.find(".sweep-") != std::string::npos) {
-      // A killed sweep's staging directory (no sweep is live here: we hold the lock).
-      bool ours = entry.is_directory(ec) && !entry.is_symlink(ec);
+      // A killed sweep's staging directory (no sweep is live here: we hold the lock; no run of
+      // it goes on here: checked above). One made on another host is left: its run may go on.
+      bool ours = entry.is_directory(ec) && !entry.is_symlink(ec) && !staging_owner(entry.path()).foreign;
       for (const fs::directory_entry& item : fs::directory_iterator(entry.path(), ec)) {
         ours = ours && is_staging_entry(item.path());
       }
@@ -308,7 +385,10 @@ SweepDir::SweepDir(fs::path dir, const Sweep& sweep) : dir_(std::move(dir)), swe
     for (std::size_t i = 0; i < left.size(); ++i) {
       message += std::string(i == 0 ? (message.empty() ? "left " : "; left ") : ", ") + left[i];
     }
-    if (!left.empty()) message += " (not sesi's, or not only); remove them if they are not needed";
+    if (!left.empty()) {
+      message += " (not only sesi's, or made on another host, where their runs may still go); remove them if "
+                 "they are not needed";
+    }
     std::fprintf(stderr, "sesi: warning: %s: %s\n", (dir_ / "runs").string().c_str(), message.c_str());
   }
 }
@@ -340,6 +420,17 @@ RunProcess::RunProcess(const fs::path& dir, const Sweep& sweep, const Variant& v
       runs_(dir / "runs"),
       trajectory_(sweep.trajectory) {
   staging_ = make_staging(runs_, name_);
+  // The marker, locked before the run starts: a rerun after this sweep was killed sees the lock
+  // (the run inherits it) and keeps the folder while the run goes.
+  const fs::path marker = staging_ / staging_marker_name;
+  marker_fd_ = ::open(marker.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (marker_fd_ < 0 || ::flock(marker_fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    if (marker_fd_ >= 0) ::close(std::exchange(marker_fd_, -1));
+    std::error_code ec;
+    fs::remove_all(staging_, ec);
+    throw std::runtime_error("cannot write " + marker.string() + ": " + std::strerror(error));
+  }
   write_file(staging_ / "scene.toml", variant.scene_text);
   const std::string log = (staging_ / "log.txt").string();
   const std::string exe = self_exe().string();
@@ -356,6 +447,8 @@ RunProcess::RunProcess(const fs::path& dir, const Sweep& sweep, const Variant& v
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  // The run inherits the marker's lock through a copy of the descriptor (not close-on-exec).
+  posix_spawn_file_actions_adddup2(&actions, marker_fd_, marker_fd_ == 3 ? 4 : 3);
   posix_spawn_file_actions_addchdir_np(&actions, staging_.c_str());
   // Its own process group: a Ctrl-C reaches the sweep, which stops its runs once (stop()).
   sigset_t defaults, none;
@@ -371,9 +464,16 @@ RunProcess::RunProcess(const fs::path& dir, const Sweep& sweep, const Variant& v
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attributes);
   if (error != 0) {
+    ::close(std::exchange(marker_fd_, -1));
     std::error_code ec;
     fs::remove_all(staging_, ec);
     throw std::runtime_error("cannot start run " + name_ + ": " + std::strerror(error));
+  }
+  const std::string owner =
+      std::to_string(pid_) + " " + std::to_string(start_time(pid_)) + " " + host_name() + "\n";
+  if (::pwrite(marker_fd_, owner.data(), owner.size(), 0) != static_cast<ssize_t>(owner.size())) {
+    // Without the pid the lock still tells (where flock is not emulated per process).
+    std::fprintf(stderr, "sesi: warning: cannot write %s: %s\n", marker.c_str(), std::strerror(errno));
   }
 }
 
@@ -386,6 +486,8 @@ RunProcess& RunProcess::operator=(RunProcess&& other) noexcept {
   staging_ = std::move(other.staging_);
   trajectory_ = other.trajectory_;
   pid_ = std::exchange(other.pid_, -1);
+  if (marker_fd_ >= 0) ::close(marker_fd_);
+  marker_fd_ = std::exchange(other.marker_fd_, -1);
   wait_status_ = other.wait_status_;
   ended_ = other.ended_;
   stopped_ = other.stopped_;
@@ -399,6 +501,7 @@ RunProcess::~RunProcess() {
     ::kill(pid_, SIGKILL);
     ::waitpid(pid_, &wait_status_, 0);
   }
+  if (marker_fd_ >= 0) ::close(marker_fd_);
 }
 
 bool RunProcess::poll() {
@@ -430,6 +533,9 @@ RunResult RunProcess::finish(int rank, const std::string& host) {
   const int code = WIFEXITED(wait_status_) ? WEXITSTATUS(wait_status_) : -1;
   result.exit_status = code >= 0 ? code : 128 + WTERMSIG(wait_status_);
   std::error_code ec;
+  // The run has ended: its staging marker goes (a run directory holds only run files).
+  fs::remove(staging_ / staging_marker_name, ec);
+  if (marker_fd_ >= 0) ::close(std::exchange(marker_fd_, -1));
   if (code == exit_interrupted || (stopped_ && code != exit_ok && code != exit_run_failed)) {
     result.status = "interrupted";
     result.message = "interrupted; run again by a rerun of the sweep";

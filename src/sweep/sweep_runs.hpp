@@ -11,7 +11,10 @@
 /// A run is the `sesi` program itself (/proc/self/exe run scene.toml --out out), started in a
 /// hidden staging directory DIR/runs/.NNNN.sweep-XXXXXX; when it ends, its outputs and the
 /// marker are put in place as DIR/runs/NNNN in one rename. So DIR/runs/NNNN is either absent or
-/// a finished run, and a rerun of the sweep skips it when its marker and scene match.
+/// a finished run, and a rerun of the sweep skips it when its marker and scene match. While the
+/// run goes, its staging directory holds .sesi-sweep-staging (the run's pid, locked by the
+/// sweep and the run): a rerun after the sweep was killed refuses while such a run still goes,
+/// and removes the staging directories of runs that ended.
 
 #include <chrono>
 #include <filesystem>
@@ -99,6 +102,7 @@ class RunProcess {
   std::filesystem::path runs_, staging_;
   bool trajectory_ = false;
   pid_t pid_ = -1;
+  int marker_fd_ = -1;  ///< the staging marker, locked while the run goes
   int wait_status_ = 0;
   bool ended_ = false, stopped_ = false;
   std::chrono::steady_clock::time_point start_;

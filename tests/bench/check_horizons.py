@@ -6,15 +6,16 @@ of horizon_runs.csv reaching the level, and that a smaller level is never reache
 larger one (its runs are a subset). Also `--dts`/`--tols` in the ordinary sweep (the rows use
 exactly those settings; the '# sampling:' line counts the steps that do not divide the sample
 spacing), and that bad values are refused with exit status 2, one line naming the option,
-nothing written. Timings are not compared with anything: targets live in the benchmark."""
+nothing written. Timings are not compared with anything (ctest's TIMEOUT is the hang guard): targets
+live in the benchmark."""
 import argparse
 import csv
+import json
 import math
 import os
 import shutil
 import subprocess
 import sys
-import time
 
 COLUMNS = ["method", "order", "horizon", "level", "reached", "dt_or_tol", "steps", "force_evals",
            "wall_seconds", "max_energy_error", "runs", "best_error"]
@@ -38,12 +39,10 @@ def main():
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
     failures = []
-    start = time.monotonic()
 
     def bench(args, out):
         shutil.rmtree(out, ignore_errors=True)
-        return subprocess.run([a.sesi, "bench", *args, "--out", out], capture_output=True, text=True,
-                              timeout=60)
+        return subprocess.run([a.sesi, "bench", *args, "--out", out], capture_output=True, text=True)
 
     # Bad values: exit status 2, one line naming the option, no output directory.
     bad_out = os.path.join(a.work, "horizons-bad")
@@ -62,14 +61,13 @@ def main():
             failures.append(f"{' '.join(args)}: exit {r.returncode}, stderr {r.stderr!r}, "
                             f"written: {os.path.exists(bad_out)}")
 
-    # The horizon default: every method of `sesi run` (its METHODS list, but auto) and the two
+    # The horizon default: every method of `sesi run` (its machine-readable list) and the two
     # odeint methods of the targets.
-    run_help = subprocess.run([a.sesi, "run", "--help"], capture_output=True, text=True).stdout
-    section = run_help.split("\nMETHODS")[1].split("\n\n")[0].splitlines()[1:]
-    methods = [line.split()[0] for line in section if line.startswith("  ") and not line.startswith("   ")]
-    methods = [m for m in methods if m != "auto" and not m.endswith("*:")] + ["dopri5", "rk78"]
-    if len(methods) != 22:
-        failures.append(f"sesi run --help lists {len(methods) - 2} methods: {methods}")
+    listed = subprocess.run([a.sesi, "run", "--list-methods", "--json"], capture_output=True, text=True)
+    if listed.returncode != 0:
+        print(f"FAIL: sesi run --list-methods --json: exit {listed.returncode}, {listed.stderr!r}")
+        return 1
+    methods = [m["name"] for m in json.loads(listed.stdout)["methods"]] + ["dopri5", "rk78"]
 
     out = os.path.join(a.work, "horizons")
     run = bench(["--quick", "--scene", "paper", "--horizons", ",".join(f"{h:g}" for h in HORIZONS),
@@ -150,12 +148,9 @@ def main():
         # t_end 20, 200 samples: spacing 0.1, so dt 0.07 does not divide it (2 of 4 runs).
         if not any(n.startswith("# sampling: 2 of 4 fixed-step runs") for n in notes):
             failures.append(f"--dts sweep: no '# sampling: 2 of 4' line in {notes}")
-    elapsed = time.monotonic() - start
-    if elapsed > 40:
-        failures.append(f"took {elapsed:.1f} s (budget 40 s)")
     for f in failures:
         print("FAIL:", f)
-    print(f"{len(table)} rows, {len(runs)} runs, {elapsed:.2f} s")
+    print(f"{len(table)} rows, {len(runs)} runs")
     return 1 if failures else 0
 
 

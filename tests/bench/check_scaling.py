@@ -32,8 +32,7 @@ def main():
 
     def run(args, out):
         shutil.rmtree(out, ignore_errors=True)
-        return subprocess.run([a.sesi, "bench", "--scaling", *args, "--out", out], capture_output=True, text=True,
-                              timeout=100)
+        return subprocess.run([a.sesi, "bench", "--scaling", *args, "--out", out], capture_output=True, text=True)
 
     for option, args in [("--space", ["--space", "torus"]), ("--n", ["--n", "100,x"]),
                          ("--methods", ["--methods", "sesi3"]), ("--potential", ["--potential", "coulomb"]),

@@ -4,9 +4,10 @@
 // What is checked, and why the bounds hold:
 //  - effective order: the post-processed final states of runs at N, 2N, 4N steps differ by
 //    C h^p (1 + O(h^2)), p the table's effective order, while the kernel alone (its variables read
-//    as the state) is of order 4: the measured order within 0.3 of p at order 6 and 0.5 at orders
-//    8 and 10, whose O(h^2) corrections are larger at the steps where the differences are still
-//    well above the floor (tests/core/orders.cpp argues the same way). A kernel read without
+//    as the state) is of order 4: the measured order within 0.3 of p, at step counts where it is
+//    asymptotic, p + O(h^2) (measured within 0.29: 6.14 5.92 5.98 5.91 5.94; 8.29 7.79 8.00 8.18;
+//    10.19 10.04 9.93 10.17 10.07; order 10 on S^3 and H^3 at N = 3, where N = 2 gives 10.42 and
+//    N = 4 meets the floor). A kernel read without
 //    processing, or processed the wrong way round, is of order 4, 4 or more away. Long double:
 //    the tables' 15 digits leave the order conditions satisfied to about 1e-15, and the
 //    differences stop falling at 1e-17 .. 1e-16 of the state (measured on these scenes at
@@ -66,11 +67,6 @@ OrderMeasurement measure_processed(const Sys& sys, const sesi::State<typename Sy
   return {std::log2(d1 / d2), d1, d2, static_cast<double>(size_of(c))};
 }
 
-template <class Table>
-double order_tolerance() {
-  return Table::order >= 8 ? 0.5 : 0.3;
-}
-
 /// Effective order of Table's processed method, and order 4 of its kernel alone, in Form.
 template <class Table, sesi::Splitting Form, class Sys>
 void effective_order(const Sys& sys, const sesi::State<typename Sys::Chart>& x0,
@@ -86,7 +82,7 @@ void effective_order(const Sys& sys, const sesi::State<typename Sys::Chart>& x0,
                           double(4 * steps * Table::kernel::stages + 2 * Table::processor_stages);
   CHECK(m.d2 > 30 * roundoff);
   CHECK(m.d2 > 10 * 1e-16 * m.scale);
-  CHECK(std::abs(m.order - double(Table::order)) <= order_tolerance<Table>());
+  CHECK(std::abs(m.order - double(Table::order)) <= 0.3);  // p + O(h^2), asymptotic at these N (above)
 
   // The kernel alone, its variables taken for the state: order 4.
   const auto k = measure_order<sesi::Composition<typename Table::kernel, Chart, Form>>(sys, x0, t_end, steps);
@@ -105,7 +101,7 @@ TEST_CASE_TEMPLATE_DEFINE("processed: effective order on the seed's scene, S^3, 
   using Real = long double;
   // N for each scene (the seed's to t = 2, the others to scene_time()).
   constexpr int p = Table::order;
-  constexpr long seed = p == 8 ? 16 : 8, curved = p == 6 ? 8 : p == 8 ? 4 : 2, flat = p == 6 ? 16 : 8;
+  constexpr long seed = p == 8 ? 16 : 8, curved = p == 6 ? 8 : p == 8 ? 4 : 3, flat = p == 6 ? 16 : 8;
   {
     namespace paper = sesi::scenes::paper;
     const auto sys = paper::make_system<Real>();
@@ -276,10 +272,12 @@ TEST_CASE("processed: effective order across re-chartings (bodies crossing the p
   // (examples/scenes/sphere-pole-crossing.toml), to t = 6: every run re-charts (and so leaves and
   // re-enters the kernel's variables) once. The world points and velocities of the final states
   // at N, 2N, 4N steps (their charts may differ), in long double; the measured order within 0.3
-  // at order 6 and 0.8 at orders 8 and 10: the O(h^2) corrections are large on this scene (order
-  // 8 measures 12.1, 9.3 and 8.7 at N = 30, 60, 120, where N = 240 reaches the floor), and 0.8
-  // still tells 8 from 6 and 10, and all from the 4 measured when the kernel's variables are
-  // re-charted without leaving them (docs/scheme.md).
+  // where it is asymptotic: 6.02 (N = 120) and 10.11 (N = 80; 10.30 at 60, and 10.91, 10.64 at
+  // 90, 100, where the re-chartings fall differently). Order 8 is not asymptotic on this scene
+  // above the floor (12.1, 9.3, 8.7, 8.7, 8.4, 8.3 at N = 30, 60, 120, 160, 180, 200, where the
+  // differences reach 1e-16), approaching 8 from above: it is checked from below, at least
+  // 8 - 0.3, which tells it from the 4 measured when the kernel's variables are re-charted
+  // without leaving them (docs/scheme.md).
   using Real = long double;
   using Chart = sesi::Sphere<2, Real>;
   const auto sys = sesi::System(Chart(Real(1)), std::vector<Real>{Real(1), Real(0.5)},
@@ -321,9 +319,14 @@ TEST_CASE("processed: effective order across re-chartings (bodies crossing the p
     CHECK(r2 >= 1);
     CHECK(r3 >= 1);
     CHECK(d2 > 10 * 1e-16);
-    CHECK(std::abs(std::log2(d1 / d2) - double(Table::order)) <= (Table::order == 6 ? 0.3 : 0.8));
+    const double order = std::log2(d1 / d2);
+    if (Table::order == 8) {
+      CHECK(order >= 8 - 0.3);  // pre-asymptotic from above (see the top of the case)
+    } else {
+      CHECK(std::abs(order - double(Table::order)) <= 0.3);  // p + O(h^2), asymptotic at these N
+    }
   };
   check.template operator()<co::Blanes6Processed>(120);
   check.template operator()<co::BlanesCasasMurua8Processed>(120);
-  check.template operator()<co::BlanesCasasMurua10Processed>(60);
+  check.template operator()<co::BlanesCasasMurua10Processed>(80);
 }

@@ -82,14 +82,18 @@ TEST_CASE("the neighbour index finds exactly the pairs within reach") {
     for (double reach : {1.0, 2.5}) check_index(chart, points_of(chart, s), reach, 1e-12);
   }
   SUBCASE("H^2 at the origin, and 10 R away") {
-    // Far out, a point's coordinates are of size R e^10, so a chord of size 1 carries a
-    // relative error of about eps e^20 ~ 1e-7: the slack at the reach.
-    const double R = 3.0;
+    const double R = 3.0, spread = 3.0 * R;
     const sesi::Hyperbolic<2, double> chart(R);
     for (double far : {0.0, 10.0 * R}) {
-      const auto s = random_state(chart, n, 3.0 * R, far, 1, 5);
-      const double slack = far > 0 ? 1e-5 : 1e-12;
-      for (double reach : {1.0, 2.5, 8.0}) check_index(chart, points_of(chart, s), reach, slack);
+      const auto s = random_state(chart, n, spread, far, 1, 5);
+      for (double reach : {1.0, 2.5, 8.0}) {
+        // Bodies reach D = far + spread (13 R, or 3 R), where coordinates of size R e^(D/R) carry eps R
+        // e^(D/R) each: a chord of points `reach` apart errs by eps e^(2D/R) R/reach relative, a
+        // distance from their Minkowski product by eps e^(2D/R) (R/reach)^2; (1 + R/reach)^2
+        // covers both (about 7e-4 at reach 1, 10 R away; 1.4e-12 about the origin, D = 3 R).
+        const double slack = eps * std::exp(2.0 * (far + spread) / R) * std::pow(1.0 + R / reach, 2);
+        check_index(chart, points_of(chart, s), reach, slack);
+      }
     }
   }
   SUBCASE("H^3, strongly curved (R = 1)") {

@@ -17,7 +17,8 @@ folder per part of the program (src/<part>), in files <part>/cases_*.py:
 
 Each cases file is exec'd in this module's namespace, so its @case functions use the helpers here
 (Context, check, expect_input_error, ...) without importing them. Standard library only.
-Exit status 0 passes, 77 skips (ctest SKIP_RETURN_CODE), anything else fails.
+Exit status 0 passes, 77 skips (ctest SKIP_RETURN_CODE; a "SKIPPED: reason" line says why, raise
+Skip(reason) only for a missing optional part), anything else fails.
 """
 import argparse
 import json
@@ -128,6 +129,8 @@ def earlier_outputs(directory):
     for name in OUTPUTS:
         (directory / name).write_text(f"earlier {name}\n")
     (directory / "plot.png").write_bytes(b"earlier plot")
+    # The earlier run's manifest, with the plot that tools/plot_run.py added to it.
+    (directory / "sesi-manifest.txt").write_text("# sesi-manifest 1: earlier\n" + "\n".join(OUTPUTS + ["plot.png"]) + "\n")
     return snapshot(directory)
 
 
@@ -226,7 +229,8 @@ def main():
     try:
         run_case(ctx, args.case)
     except Skip as e:
-        print(f"skipped: {e}")
+        # ctest shows no output of a skipped test: tests/check_skips.cmake reads this line from its JUnit file.
+        print(f"SKIPPED: {str(e).removeprefix('SKIPPED: ')}")
         return SKIP
     except Failure as e:
         print(f"FAILED {args.case}: {e}")

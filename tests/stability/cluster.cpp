@@ -365,39 +365,63 @@ TEST_CASE("cluster frame: world points, velocities and the momentum map") {
     CHECK(std::abs(sys.chart().tangency(x, Amb(U.col(b)))) <= 64 * stab::eps<double>() * x.norm() * Amb(U.col(b)).norm());
   }
   // The momentum map: the same run with the cluster frame at the identity (bit-identical locally,
-  // with the same re-centrings) has M_0, and the far state's map is Ad_{C_D} M_0 = C_D M_0 C_D^T.
+  // with the same re-centrings B_1..B_r) has M_0, and the far state's map is Ad_{C_D} M_0 = C_D M_0 C_D^T.
   auto s0 = near_state(sys, X, V);
   s0.set_cluster(Frame::Identity());
   Stepper st0;
-  stab::run(st0, sys, s0, 0.01, 300);
+  int recentred = 0;
+  Frame chain = Frame::Identity();  // |B_1| |B_2| ... |B_r| (entrywise absolute values)
+  for (long k = 0; k < 300; ++k) {
+    const Frame before = s0.cluster;
+    st0.do_step(sys, s0, double(k) * 0.01, 0.01);
+    if (s0.cluster != before) {
+      Frame inverse = before.transpose();  // eta B^T eta
+      inverse.row(2) = -inverse.row(2);
+      inverse.col(2) = -inverse.col(2);
+      chain = (chain * (inverse * s0.cluster).cwiseAbs()).eval();
+      ++recentred;
+    }
+  }
+  CHECK(recentred >= 1);
   CHECK(s0.q == s.q);
   const auto m0 = sesi::momentum_map(sys, s0);
   const auto m1 = sesi::momentum_map(sys, s);
-  Frame M0 = Frame::Zero();
+  auto local = s0;
+  local.clustered = false;
+  const auto ml = sesi::momentum_map(sys, local);  // the local map M_l, the same on both sides
+  Frame M0 = Frame::Zero(), Ml = Frame::Zero();
   int k = 0;
   for (int r = 0; r < 3; ++r) {
     for (int c = r + 1; c < 3; ++c, ++k) {
       M0(r, c) = m0[k];
       M0(c, r) = -m0[k];
+      Ml(r, c) = Ml(c, r) = std::abs(ml[k]);
     }
   }
   const Frame cd = far_frame(20.0);
   const Frame expected = cd * M0 * cd.transpose();
-  double worst = 0;
+  // Both sides are M_l moved by the frames in two groupings, fl(C M_l C^T) with C = fl(C_D B_1 .. B_r)
+  // and fl(C_D fl(B M_l B^T) C_D^T) with B = fl(B_1 .. B_r). Each of the 2r + 2 products of 3x3
+  // matrices on a side rounds to gamma_3 = 3 eps / 2 of the product of absolute values
+  // (Higham, Accuracy and Stability, 3.5): |m1 - expected| <= (4r + 4) (3 eps / 2) P entrywise,
+  // P = |C_D| |B_1|..|B_r| |M_l| (|C_D| |B_1|..|B_r|)^T. (The former bound, 64 eps |C_D|^2 |B|^4 |M_0|
+  // in norms, was 1e5 times the difference measured.)
+  const Frame outer = cd.cwiseAbs() * chain;
+  const Frame P = outer * Ml * outer.transpose();
+  const double c = (4.0 * recentred + 4.0) * 1.5 * stab::eps<double>();
+  double worst = 0, worst_ratio = 0;
   k = 0;
   for (int r = 0; r < 3; ++r) {
-    for (int c = r + 1; c < 3; ++c, ++k) worst = std::max(worst, std::abs(m1[k] - expected(r, c)));
+    for (int col = r + 1; col < 3; ++col, ++k) {
+      const double d = std::abs(m1[k] - expected(r, col));
+      worst = std::max(worst, d);
+      worst_ratio = std::max(worst_ratio, d / (c * P(r, col)));
+      CHECK(d <= c * P(r, col));
+    }
   }
-  const double rel = worst / expected.norm();
-  report("cluster D = 20: momentum map against Ad_{C_D} of the origin run's (relative)", rel);
-  // Both sides are products of the local map with frames of size e^D that cancel to the far map's
-  // entries, in two groupings, (C_D B) M (C_D B)^T and C_D (B M B^T) C_D^T with B = s0.cluster
-  // (the re-centrings): each rounds to eps |C_D|^2 |B|^2 |M_local| with |M_local| <= |B|^2 |M0|
-  // (|B^-1| = |B| for a Lorentz matrix). GCC -O2 lands at 2e-15 relative, clang -O1 at 3e-7.
-  const double bound =
-      64 * stab::eps<double>() * cd.squaredNorm() * s0.cluster.squaredNorm() * s0.cluster.squaredNorm() * M0.norm();
-  report("cluster D = 20: momentum map difference / its rounding bound", worst / bound);
-  CHECK(worst <= bound);
+  report("cluster D = 20: momentum map against Ad_{C_D} of the origin run's (relative)", worst / expected.norm());
+  report("cluster D = 20: momentum map difference / its rounding bound (largest entry)", worst_ratio);
+  report("cluster D = 20: re-centrings", recentred);
 }
 
 TEST_CASE("cluster frame on H^3 and on a dynamic-size H^3: pair and centre at D = 20") {
@@ -479,7 +503,7 @@ TEST_CASE("enter_cluster_frame: a pair and an orbit given in world coordinates f
   const Frame turn = stab::givens<double>(3, 0, 1, 0.4);
   const sesi::RechartPolicy<double> policy;
   const auto go = [&](const char* name, auto make, const Mat<double>& X, const Mat<double>& V, bool with_centre,
-                      double dt, long steps) {
+                      double dt, long steps, double response) {
     std::vector<double> ref;
     {
       const Amb o(0, 0, 1);
@@ -502,19 +526,25 @@ TEST_CASE("enter_cluster_frame: a pair and an orbit given in world coordinates f
       Amb local_centre(3);
       sys.chart().to_frame(s.cluster, centre, local_centre);
       const Errors e = run(sys, s, dt, steps, with_centre ? &centre : nullptr, &ref);
-      const double input = 64 * stab::eps<double>() * std::sinh(D);
+      // The input's rounding (c X, c V: 3-term products of e^D-sized entries, c itself rounded)
+      // moves each point and velocity across the line of sight by <= 4 eps sinh D, to_frame by <= 4
+      // more (its test above: 0.57 measured), and the invariants respond to an initial displacement
+      // by at most `response` by t = 5 (measured at the origin by +-1e-6 along each tangent
+      // direction with the program: pair 1.27, orbit 10.3).
+      const double input = response * (4 + 4) * stab::eps<double>() * std::sinh(D);
       const std::string tag = std::string("entered ") + name + " D = " + std::to_string(int(D));
       report(tag + ": invariant error", e.invariant);
       report(tag + ": energy error", e.energy);
       CHECK(e.invariant <= 10 * origin.invariant + input);
-      CHECK(e.energy <= 10 * origin.energy + input);
+      // No floor from lengths: the energy is formed from cluster-local O(1) quantities.
+      CHECK(e.energy <= 10 * origin.energy);
     }
   };
   Mat<double> X, V;
   pair_scene(X, V);
-  go("harmonic pair", pair_system, X, V, false, 0.01, 500);
+  go("harmonic pair", pair_system, X, V, false, 0.01, 500, 1.27);
   orbit_scene(X, V);
-  go("central orbit", orbit_system, X, V, true, 0.01, 500);
+  go("central orbit", orbit_system, X, V, true, 0.01, 500, 10.3);
 }
 
 TEST_CASE("closest_encounter in a cluster frame: the centre moved into the frame") {

@@ -7,7 +7,8 @@
 Every sweep here is a few short runs of an example scene, so that the whole file takes seconds
 on two cores. With --mpiexec (the program is built with MPI), the same sweep runs under
 `mpiexec --oversubscribe -np K` for K = 1, 2, 3; without it those cases skip.
-Standard library only. Exit status 0 passes, 77 skips (ctest SKIP_RETURN_CODE), anything else fails.
+Standard library only. Exit status 0 passes, 77 skips (ctest SKIP_RETURN_CODE, with a "SKIPPED: reason"
+line), anything else fails.
 """
 import argparse
 import csv
@@ -15,6 +16,7 @@ import json
 import math
 import os
 import pathlib
+import random
 import shutil
 import signal
 import subprocess
@@ -444,6 +446,221 @@ values = [0.2, 1e4, 0.2]
     check([r["status"] for r in rows(out)] == ["ok"] * 3, f"after the rerun: {rows(out)}")
 
 
+# ---- issue #24: linear checking and its cap, live runs of a killed sweep, threads, long input -----
+
+CAP = 100_000  # max_sweep_runs, src/sweep/sweep_file.hpp
+
+
+@case
+def sweep_check_cap_linear(ctx):
+    """A sweep at the cap (10^5 runs from one values array, and from one range) checks: building
+    the variants used to copy the whole array per variant (10^5 did not end in 120 s, ctest's
+    TIMEOUT; it takes some 4 s now). One over the cap is refused with the cap and its reason."""
+    ctx.scene("sphere-two-body-xv.toml", t_end=0.5)
+    head = 'scene = "sphere-two-body-xv.toml"\n[[vary]]\nkey = "integrator.dt"\n'
+    values = ctx.write("values.toml", head + "values = [" + ", ".join(repr(0.001 + 1e-9 * i) for i in range(CAP)) + "]\n")
+    ranged = ctx.write("range.toml", head + f"range = [0.001, 0.002, {CAP}]\n")
+    for sweep in (values, ranged):
+        try:
+            result = ctx.run("sweep", sweep, "--check", "--out", ctx.work / "never")
+        except subprocess.TimeoutExpired:  # the hang guard, as ctest's TIMEOUT
+            raise Failure(f"sesi sweep {sweep.name} --check did not end in 120 s (quadratic checking?)")
+        expect_status(result, 0, f"sesi sweep {sweep.name} --check")
+        check(f"{CAP} runs, every variant a valid scene" in result.stdout, f"{sweep.name}: {result.stdout!r}")
+    check(not (ctx.work / "never").exists(), "--check wrote outputs")
+    over = {
+        "range": head + f"range = [0.001, 0.002, {CAP + 1}]\n",
+        "count": 'scene = "sphere-two-body-xv.toml"\n[[vary]]\nkey = "bodies.0.x"\nperturb = 1e-6\n'
+                 f"count = {CAP + 1}\n",
+        "values": head + "values = [" + ", ".join(repr(0.001 + 1e-9 * i) for i in range(CAP + 1)) + "]\n",
+        "product": head + "range = [0.001, 0.002, 400]\n[[vary]]\nkey = \"integrator.t_end\"\n"
+                   "range = [0.1, 0.2, 300]\n",
+    }
+    for name, text in over.items():
+        out = ctx.work / f"out-{name}"
+        result = ctx.run("sweep", ctx.write(f"over-{name}.toml", text), "--out", out)
+        try:
+            expect_input_error(result, f"over the cap of {CAP} runs in one sweep (each run is a process")
+        except Failure as e:
+            raise Failure(f"{name}: {e}")
+        check("integer >= 2" not in result.stderr, f"{name}: {result.stderr!r}")
+        check(not out.exists(), f"{name}: {out} was written")
+
+
+def processes_in(directory):
+    """The ids of the processes whose working directory is `directory` (a sweep's runs)."""
+    found = []
+    for proc in pathlib.Path("/proc").iterdir():
+        try:
+            if proc.name.isdigit() and os.readlink(proc / "cwd") == str(directory):
+                found.append(int(proc.name))
+        except OSError:
+            pass
+    return found
+
+
+def alive(pid):
+    """Running, not a zombie (an orphan stays one until something reaps it)."""
+    try:
+        return (pathlib.Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0] not in "ZXx"
+    except (OSError, IndexError):
+        return False
+
+
+@case
+def sweep_rerun_keeps_live_runs(ctx):
+    """A sweep killed with SIGKILL leaves its running run going (its own process group); a rerun
+    refuses while it goes and keeps its staging folder, and removes the folder once it has ended."""
+    ctx.scene("sphere-two-body-xv.toml", t_end=0.2)
+    sweep = ctx.write("sweep.toml", """scene = "sphere-two-body-xv.toml"
+[[vary]]
+key = "integrator.t_end"
+values = [1e4, 0.2]
+""")
+    out = ctx.work / "out"
+    process = subprocess.Popen([ctx.sesi, "sweep", str(sweep), "--out", str(out), "--jobs", "1"], cwd=ctx.work,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
+    children = []
+    try:
+        deadline = time.time() + 30
+        staging = []
+        while time.time() < deadline and not children:
+            staging = list((out / "runs").glob(".0000.sweep-*")) if (out / "runs").exists() else []
+            children = [pid for folder in staging for pid in processes_in(folder)]
+            time.sleep(0.05)
+        check(len(staging) == 1 and len(children) == 1, f"run 0000 did not start: {staging}, {children}")
+        process.kill()  # the sweep only, as the OOM killer or a scheduler would
+        process.wait(timeout=30)
+        check(alive(children[0]), "the run ended with its sweep")
+        refused = ctx.run("sweep", sweep, "--out", out)
+        expect_input_error(refused, f"run 0000 of an earlier sweep is still running in runs/{staging[0].name} "
+                                    f"(pid {children[0]})")
+        check(staging[0].is_dir() and alive(children[0]), "the live run's staging folder was removed")
+        marker = (staging[0] / ".sesi-sweep-staging").read_text().split()
+        check(marker and marker[0] == str(children[0]), f"the staging marker holds {marker}, not the run's pid")
+    finally:
+        if process.poll() is None:
+            process.kill()
+        for pid in children:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+    deadline = time.time() + 30
+    while time.time() < deadline and any(alive(pid) for pid in children):
+        time.sleep(0.05)
+    # The run has ended: a rerun removes its folder and does both runs.
+    sweep.write_text(sweep.read_text().replace("1e4", "0.2"))
+    result = ctx.run("sweep", sweep, "--out", out, "-q")
+    expect_status(result, 0, "rerun after the killed sweep's run ended")
+    check("removed the staging folders of killed runs: " + staging[0].name in result.stderr, f"{result.stderr!r}")
+    check([p.name for p in sorted((out / "runs").iterdir())] == ["0000", "0001"], f"{list((out / 'runs').iterdir())}")
+    check(not (out / "runs" / "0000" / ".sesi-sweep-staging").exists(), "a run directory kept the staging marker")
+    check([r["status"] for r in rows(out)] == ["ok", "ok"], f"{rows(out)}")
+
+
+def lennard_jones_scene(n, seed=1, density=0.5, speed=1.0):
+    """n Lennard-Jones bodies on S^2 as tools/lattice_scene.py makes them (a Fibonacci lattice at
+    the given density, random tangent velocities), 2 threads, the trajectory every 10 steps."""
+    rng = random.Random(seed)
+    radius = math.sqrt(n / (4 * math.pi * density))
+    golden = math.pi * (3 - math.sqrt(5))
+    lines = [f'name = "lj-s2-{n}"', "[space]", 'kind = "sphere"', "dim = 2", f"radius = {radius!r}"]
+    for k in range(n):
+        z = 1 - 2 * (k + 0.5) / n
+        rho = math.sqrt(1 - z * z)
+        x = [radius * rho * math.cos(k * golden), radius * rho * math.sin(k * golden), radius * z]
+        v = [rng.gauss(0, speed) for _ in range(3)]
+        dot = sum(xi * vi for xi, vi in zip(x, v)) / radius ** 2
+        v = [vi - dot * xi for xi, vi in zip(x, v)]
+        lines += ["[[bodies]]", "mass = 1.0", f"x = [{x[0]!r}, {x[1]!r}, {x[2]!r}]", f"v = [{v[0]!r}, {v[1]!r}, {v[2]!r}]"]
+    lines += ["[[potential]]", 'kind = "lennard-jones"', "epsilon = 1.0", "sigma = 1.0", "cutoff = 2.5",
+              "[integrator]", 'method = "sesi2"', "dt = 0.005", "t_end = 0.2", "output_every = 10", "threads = 2", ""]
+    return "\n".join(lines)
+
+
+def summary_without_timing(path):
+    data = json.loads(path.read_text())
+    return {k: v for k, v in data.items() if k != "wall_seconds" and "thread" not in k}
+
+
+@case
+def sweep_threads_same_as_one_thread(ctx):
+    """Runs of 2000 Lennard-Jones bodies on S^2 with threads = 2 (the scene's key, which the sweep
+    keeps): every output equals, byte for byte (cmp), sesi run of the same scene with --threads 1,
+    across Verlet-list rebuilds."""
+    import filecmp
+    ctx.write("lj.toml", lennard_jones_scene(2000))
+    sweep = ctx.write("sweep.toml", """scene = "lj.toml"
+trajectory = true
+[[vary]]
+key = "integrator.dt"
+values = [0.005, 0.004]
+""")
+    out = ctx.work / "out"
+    expect_status(ctx.run("sweep", sweep, "--out", out, "--jobs", "1", "-q"), 0, "sesi sweep (2 threads a run)")
+    runs = run_dirs(out)
+    check(len(runs) == 2, f"runs: {runs}")
+    half_skin = 0.5 * 0.12 * 2.5  # the lists are rebuilt once a body has moved half the skin (0.12 of the cutoff)
+    for run in runs:
+        check("threads = 2" in (run / "scene.toml").read_text(), f"{run}: the variant lost threads = 2")
+        reference = ctx.work / "one-thread" / run.name
+        expect_status(ctx.run("run", "scene.toml", "--threads", "1", "--out", reference, "-q", cwd=run), 0,
+                      f"sesi run {run.name} --threads 1")
+        names = sorted(p.name for p in reference.iterdir() if p.name != "summary.json")
+        check("trajectory.csv" in names and "diagnostics.csv" in names, f"{reference}: {names}")
+        for name in names:
+            check(filecmp.cmp(run / name, reference / name, shallow=False),
+                  f"run {run.name}: {name} with 2 threads differs from --threads 1")
+        check(summary_without_timing(run / "summary.json") == summary_without_timing(reference / "summary.json"),
+              f"run {run.name}: summary.json with 2 threads differs from --threads 1")
+        used = json.loads((run / "summary.json").read_text()).get("threads_used", 2)
+        check(used == 2, f"run {run.name} used {used} threads, not the scene's 2")
+        # A rebuild happened: some body ended farther than half the skin (chord <= arc) from its start.
+        with open(run / "trajectory.csv", newline="") as f:
+            table = list(csv.reader(f))
+        header, first, last = table[0], table[1], table[-1]
+        check(first[0] != last[0], f"run {run.name}: one frame in trajectory.csv")
+        moved = 0.0
+        for i, column in enumerate(header):
+            if column.endswith("_x1"):  # b7_x1, b7_x2, b7_x3: body 7's embedding point
+                chord = math.dist([float(first[i + k]) for k in range(3)], [float(last[i + k]) for k in range(3)])
+                moved = max(moved, chord)
+        check(moved > half_skin, f"run {run.name}: bodies moved at most {moved}, no Verlet-list rebuild")
+
+
+LONG = 10_000_000  # the issue's 10 MB
+
+
+@case
+def sweep_long_input_cut(ctx):
+    """A 10 MB key or value in a sweep file: one line on stderr quoting 80 bytes of it and its size."""
+    ctx.scene("sphere-two-body-xv.toml", t_end=0.5)
+    k = "k" * LONG
+    sweeps = {
+        "top_key": f'scene = "sphere-two-body-xv.toml"\n{k} = 1\n[[vary]]\nkey = "integrator.dt"\nvalues = [0.1]\n',
+        "vary_key": f'scene = "sphere-two-body-xv.toml"\n[[vary]]\nkey = "{k}"\nvalues = [0.1]\n',
+        "value": f'scene = "sphere-two-body-xv.toml"\n[[vary]]\nkey = "integrator.method"\nvalues = ["{k}"]\n',
+        "index": f'scene = "sphere-two-body-xv.toml"\n[[vary]]\nkey = "bodies.{k}.x"\nperturb = 1e-6\ncount = 2\n',
+    }
+    cut = "k" * 80 + f"... ({LONG} bytes)"
+    for name, text in sweeps.items():
+        short = ctx.run("sweep", ctx.write(f"{name}.toml", text.replace(k, "k" * 10)), "--out", ctx.work / "out")
+        path = ctx.write(f"{name}.toml", text)
+        result = ctx.run("sweep", path, "--out", ctx.work / "out")
+        err = result.stderr
+        shown = err if len(err) < 1000 else err[:300] + f"... ({len(err)} bytes)"
+        # The same message as for a 10-byte piece, the piece (quoted at most twice: in the run's
+        # values and in the scene reader's message) now 80 bytes and "... (10000000 bytes)".
+        check(len(err) <= len(short.stderr) + 2 * (80 + 20 - 10), f"{name}: {len(err)} bytes on stderr: {shown!r}")
+        try:
+            expect_input_error(result, cut)
+        except Failure as e:
+            raise Failure(f"{name}: {e}")
+        check(not (ctx.work / "out").exists(), f"{name}: outputs were written")
+        path.unlink()
+
+
 # ---- driver ------------------------------------------------------------------------------------
 
 def main():
@@ -466,7 +683,7 @@ def main():
         CASES[args.case](ctx)
     except (Skip, Failure) as e:
         skipped = isinstance(e, Skip)
-        print(f"{'skipped' if skipped else 'FAILED ' + args.case}: {e}")
+        print(f"{'SKIPPED' if skipped else 'FAILED ' + args.case}: {e}")
         return SKIP if skipped else 1
     print(f"passed {args.case}")
     return 0

@@ -187,14 +187,28 @@ struct DangerFlags {
 /// The polar angles q[a..b) with |sin q_k| < min_sine (deep below min_sine / 2). |sin q_k|
 /// changes at the rate sin q_k cos q_k dq_k/dt / |sin q_k|, and dq_k/dt has the sign of p_k
 /// (the kinetic energy is diagonal in p with positive coefficients).
+/// With three or more angles also their product P = prod |sin q_k|: the levels below them move
+/// with the factor 1 / P^2 of the kinetic energy, which the angles one by one bound only by
+/// min_sine^-2(b-a) (4^8 on S^9, where a step of dt turns the deepest level by dt v / (R P) and
+/// an order-8 method was 8e-3 off at dt = 0.01). P is in danger below min_sine^2 (two angles at
+/// the threshold; with two angles one of them is already in danger then: S^2, S^3, H^2..H^4 are
+/// unchanged), deep below half of it, and changes at the
+/// rate P sum_k cot q_k dq_k/dt, dq_k/dt = p_k / (m R^2 prod_{a<=j<k} sin^2 q_j) up to a factor
+/// common to every k (m R^2, and sinh^2 q_1 on H^n).
 template <class Q, class Scalar>
 void polar_angle_danger(const Q& q, const Q& p, int a, int b, Scalar min_sine, DangerFlags& f) {
   using std::abs;
+  Scalar product(1), rate(0), level(1);  // P, its rate's sign, 1 / prod_{a<=j<k} sin^2 q_j
   for (int k = a; k < b; ++k) {
     Scalar s, c;
     sin_cos(q[k], s, c);
     if (abs(s) < min_sine) f.add(abs(s) < min_sine / Scalar(2), s * c * p[k]);
+    product *= abs(s);
+    rate += c / s * p[k] * level;
+    level /= s * s;
   }
+  const Scalar min_product = min_sine * min_sine;
+  if (b - a >= 3 && product < min_product) f.add(product < min_product / Scalar(2), rate);
 }
 
 /// The turn's frame change T = 2 y y^T G / <y, y> - I (G the ambient metric, <y, y> = y^T G y):

@@ -255,3 +255,131 @@ def full_disk_names_out(ctx):
         check(not out.exists(), f"{out} was made by a failed run")
     finally:
         subprocess.run(["umount", str(disk)], check=True)
+
+
+# ---- issue #24: mount points, the run's manifest, --out . and --out "" -------------------------
+
+def mounted(directory, *how):
+    """Mount a tmpfs (or, with how, e.g. "--bind", what `how` says) on directory; Skip where
+    mounting is not permitted."""
+    directory.mkdir(exist_ok=True)
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        raise Skip("mounting on --out needs root and mount(8)")
+    command = ["mount", *(how or ("-t", "tmpfs", "tmpfs")), str(directory)]
+    if how:
+        command.insert(-1, str(directory))  # mount --bind DIR DIR
+    result = subprocess.run(command, capture_output=True)
+    if result.returncode != 0:
+        raise Skip(f"mounting is not permitted here: {result.stderr.decode().strip()}")
+
+
+def expect_clean_mount(mp):
+    """No staging directory or lock left inside the mount point or beside it."""
+    inside = [p.name for p in mp.iterdir() if p.name.startswith(".sesi-")]
+    check(not inside, f"staging folders or lock left in {mp}: {inside}")
+    expect_no_staging_left(mp)
+
+
+def run_into_mount_point(ctx, mp):
+    args = ["--checkpoint-every", "50", "--output-every", "7", "--quiet"]
+    result = ctx.run("run", "--t-end", "10", "--out", mp, *args)
+    expect_ok(result, "sesi run --out MOUNT_POINT")
+    names = sorted(p.name for p in mp.iterdir())
+    check(names == ["checkpoint", "diagnostics.csv", "exact.csv", "sesi-manifest.txt", "summary.json",
+                    "trajectory.csv"], f"outputs in the mount point: {names}")
+    check(summary(mp)["complete"] is True, "the run is not complete")
+    expect_clean_mount(mp)
+    # Run again into it, with a user's picture there: it stays; the earlier outputs are replaced.
+    (mp / "figure.png").write_bytes(b"a user's figure")
+    result = ctx.run("run", "--t-end", "5", "--out", mp, *args)
+    check(result.returncode == 0, f"a second run into the mount point: {result.returncode}, {result.stderr!r}")
+    check((mp / "figure.png").read_bytes() == b"a user's figure", "the user's picture in the mount point was lost")
+    check(summary(mp)["t_end"] == 5, "the earlier outputs were not replaced")
+    expect_clean_mount(mp)
+    # Go on from its end checkpoint, in place: equal to one run.
+    expect_ok(ctx.run("resume", mp, "--t-end", "12", "--quiet"), "sesi resume MOUNT_POINT")
+    whole = ctx.work / "whole"
+    expect_ok(ctx.run("run", "--t-end", "12", "--out", whole, *args), "uninterrupted run")
+    for name in ["trajectory.csv", "diagnostics.csv", "exact.csv"]:
+        check((mp / name).read_bytes() == (whole / name).read_bytes(), f"resumed in the mount point: {name} differs")
+    # An interrupted run never replaces the complete one: its outputs go to MP/incomplete.
+    process = start_long_run(ctx, mp)
+    deadline = time.monotonic() + 60
+    while not any((p / ".sesi-staging").is_file() for p in mp.glob(".sesi-??????")):
+        check(time.monotonic() < deadline and process.poll() is None, "the long run did not start")
+        time.sleep(0.02)
+    time.sleep(0.2)
+    stderr = interrupt(process)
+    check(summary(mp)["complete"] is True, "the complete run in the mount point was replaced")
+    check(summary(mp / "incomplete")["stop_reason"] == "interrupted", f"no outputs in {mp}/incomplete: {stderr!r}")
+    expect_clean_mount(mp)
+
+
+@case
+def out_mount_point(ctx):
+    # A tmpfs as --out: it cannot be renamed over; the run writes into it (issue #24).
+    mp = ctx.work / "mp"
+    mounted(mp)
+    try:
+        run_into_mount_point(ctx, mp)
+    finally:
+        subprocess.run(["umount", str(mp)], check=True)
+
+
+@case
+def out_bind_mount_point(ctx):
+    # A bind mount of a directory on itself: the same device as its parent, still a mount point.
+    mp = ctx.work / "mp"
+    mounted(mp, "--bind")
+    try:
+        run_into_mount_point(ctx, mp)
+    finally:
+        subprocess.run(["umount", str(mp)], check=True)
+
+
+@case
+def user_pictures_kept(ctx):
+    # Pictures a user put into a finished run's directory are theirs: a run repeated into it
+    # replaces only what its manifest lists (and a plot tools/plot_run.py added to it).
+    out = ctx.work / "out"
+    expect_ok(ctx.run("run", "--t-end", "1", "--out", out, "-q"), "first run")
+    manifest = (out / "sesi-manifest.txt").read_text().splitlines()
+    check(manifest[0].startswith("# sesi-manifest 1:"), f"manifest: {manifest[0]!r}")
+    on_disk = sorted(p.name for p in out.iterdir() if p.name != "sesi-manifest.txt")
+    check(sorted(manifest[1:]) == on_disk, f"the manifest lists {manifest[1:]}, the directory holds {on_disk}")
+    mine = {"figure.png": b"png", "paper.pdf": b"pdf", "sketch.svg": b"<svg/>"}
+    for name, data in mine.items():
+        (out / name).write_bytes(data)
+    (out / "plot.png").write_bytes(b"sesi's plot")  # as tools/plot_run.py writes and lists it
+    with (out / "sesi-manifest.txt").open("a") as f:
+        f.write("plot.png\n")
+    result = ctx.run("run", "--t-end", "2", "--out", out, "-q")
+    check(result.returncode == 0, f"exit status {result.returncode}: {result.stderr!r}")
+    for name, data in mine.items():
+        check((out / name).is_file() and (out / name).read_bytes() == data, f"the user's {name} was not kept")
+    check(not (out / "plot.png").exists(), "the earlier run's plot (in its manifest) was kept")
+    check(summary(out)["t_end"] == 2, "the earlier outputs were not replaced")
+    warnings = warnings_in(result.stderr)
+    check(len(warnings) == 1 and all(name in warnings[0] for name in mine), f"expected one warning naming them: "
+          f"{result.stderr!r}")
+    expect_no_staging_left(out)
+
+
+@case
+def out_current_directory_refused(ctx):
+    # --out . (or a directory above the current one) would replace where the user works.
+    cwd = ctx.work / "here"
+    cwd.mkdir()
+    (cwd / "notes.txt").write_text("mine\n")
+    before = tree(ctx.work)
+    for out, what in ((".", "is the current directory"), ("..", "holds the current directory"),
+                      (str(cwd), "is the current directory")):
+        expect_input_error(ctx.run("run", "--t-end", "1", "--out", out, cwd=cwd), key=f"--out {out}", text=what)
+        check(tree(ctx.work) == before, f"--out {out}: something was written")
+        check(not [p for p in ctx.work.rglob(".*sesi-*")], f"--out {out}: a staging folder or lock was left")
+
+
+@case
+def out_empty_refused(ctx):
+    expect_input_error(ctx.run("run", "--t-end", "1", "--out", ""), key="--out", text="got an empty path")
+    check(not any(ctx.work.iterdir()), f"something was written: {list(ctx.work.iterdir())}")

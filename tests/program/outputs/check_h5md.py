@@ -126,7 +126,7 @@ def main():
     csv_dir, h5_dir = work / "csv", work / "h5md"
     run(args.sesi, "run", scene, *ARGS, "--trajectory-format", "csv", "--out", csv_dir)
     run(args.sesi, "run", scene, *ARGS, "--trajectory-format", "h5md", "--out", h5_dir)
-    check(sorted(p.name for p in h5_dir.iterdir()) == ["diagnostics.csv", "summary.json", "trajectory.h5"],
+    check(sorted(p.name for p in h5_dir.iterdir()) == ["diagnostics.csv", "sesi-manifest.txt", "summary.json", "trajectory.h5"],
           f"h5md outputs: {sorted(p.name for p in h5_dir.iterdir())}")
     summary = json.loads((h5_dir / "summary.json").read_text())
     csv_summary = json.loads((csv_dir / "summary.json").read_text())
@@ -150,7 +150,7 @@ def main():
     scene_h5.write_text(source.replace("[integrator]", '[integrator]\ntrajectory_format = "h5md"', 1))
     run(args.sesi, "run", scene_h5, *ARGS, "--out", csv_dir)
     names = sorted(p.name for p in csv_dir.iterdir())
-    check(names == ["diagnostics.csv", "summary.json", "trajectory.h5"], f"replaced outputs: {names}")
+    check(names == ["diagnostics.csv", "sesi-manifest.txt", "summary.json", "trajectory.h5"], f"replaced outputs: {names}")
     leftovers = [p.name for p in work.iterdir() if ".sesi-" in p.name]
     check(not leftovers, f"staging directories left behind: {leftovers}")
     check((csv_dir / "trajectory.h5").read_bytes() == (h5_dir / "trajectory.h5").read_bytes(),
@@ -158,7 +158,7 @@ def main():
     # ... and a CSV run replaces an h5md run's directory (trajectory.h5 is a sesi output).
     run(args.sesi, "run", scene, *ARGS, "--out", csv_dir)
     names = sorted(p.name for p in csv_dir.iterdir())
-    check(names == ["diagnostics.csv", "summary.json", "trajectory.csv"], f"replaced outputs: {names}")
+    check(names == ["diagnostics.csv", "sesi-manifest.txt", "summary.json", "trajectory.csv"], f"replaced outputs: {names}")
     print(f"check_h5md.py: {SCENE}, {frames} frames: trajectory.h5 equals trajectory.csv")
 
 

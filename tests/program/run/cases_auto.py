@@ -16,7 +16,7 @@ def auto_run(ctx, out, scene, t_end, tol, *extra):
 
 @case
 def auto_meets_the_tolerance(ctx):
-    names = set(ctx.run("run", "--help").stdout.split())
+    names = set(ctx.run("run", "--list-methods").stdout.split())
     for name, scene, t_end in AUTO_SCENES:
         for tol in ("1e-6", "1e-9"):
             s = auto_run(ctx, ctx.work / f"{name}-{tol}", scene, t_end, tol)

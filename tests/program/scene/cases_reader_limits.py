@@ -165,3 +165,45 @@ def run_nan_says_nan(ctx):
     err = result.stderr
     check(result.returncode == 3, f"exit status {result.returncode}, expected 3: {err!r}")
     check("became NaN" in err and "overflow" not in err, f"the message does not say NaN: {err!r}")
+
+
+# ---- messages quote at most 80 bytes of the input (issue #24) -----------------------------------
+
+import re  # noqa: E402 (this file is exec'd in check_program.py's namespace)
+
+_LONG = 10_000_000  # the issue's 10 MB
+
+
+def _long_input_cases(scene):
+    """(file name, scene text, the quoted piece's first 80 bytes, its size in the message): a
+    10 MB key, string or table name wherever a message quotes one."""
+    k = "k" * _LONG
+    return [
+        ("long-key.toml", k + " = 1\n" + scene, "k" * 80, _LONG),
+        ("long-space-kind.toml", scene.replace('kind = "sphere"', f'kind = "{k}"', 1), "k" * 80, _LONG),
+        ("long-name.toml", scene.replace('name = "sphere-two-body"', f'name = "/{k}"', 1), "/" + "k" * 79, _LONG + 1),
+        ("long-potential-kind.toml", scene.replace('kind = "cotangent-gravity"', f'kind = "{k}"', 1), "k" * 80, _LONG),
+        ("long-method.toml", scene.replace('method = "sesi4"', f'method = "{k}"', 1), "k" * 80, _LONG),
+        # toml++'s own message quotes the table's name, cut by toml++ to some 500 bytes
+        ("long-table-twice.toml", f"[{k}]\n[{k}]\n" + scene, "k" * 80, None),
+    ]
+
+
+@case
+def reader_limits_long_input_cut(ctx):
+    # stderr is the message for a 10-byte piece, the piece now 80 bytes and "... (N bytes)".
+    scene = _limits_scene(ctx)
+    for name, text, head, size in _long_input_cases(scene):
+        short = ctx.run("run", ctx.write(name, text.replace("k" * _LONG, "k" * 10)), "--out", ctx.work / "out")
+        path = ctx.write(name, text)
+        result = ctx.run("run", path, "--out", ctx.work / "out")
+        err = result.stderr
+        shown = err if len(err) < 1000 else err[:300] + f"... ({len(err)} bytes)"
+        check(short.returncode == 2 and len(err) <= len(short.stderr) + 80 + 21 - 10,
+              f"{name}: {len(err)} bytes on stderr, {len(short.stderr)} for a 10-byte piece: {shown!r}")
+        expect_input_error(result, file=path)
+        cut = re.search(re.escape(head) + r"\.\.\. \((\d+) bytes\)", err)
+        check(cut and (size is None or int(cut.group(1)) == size),
+              f"{name}: the quoted piece is not cut to 80 bytes and its size ({size}): {shown!r}")
+        check(not (ctx.work / "out").exists(), f"{name}: outputs were written")
+        path.unlink()

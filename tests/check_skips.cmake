@@ -1,0 +1,35 @@
+# Fails when ctest skipped a test: `make test` (and the sanitizer job under SESI_REQUIRE_ALL_TESTS)
+# installs every optional part, so every test it registered must run. ctest shows no output of a
+# skipped test, so this prints each one with its "SKIPPED: reason" lines, read from the JUnit file
+# of `ctest --output-junit`.
+#   cmake -D JUNIT=<file> -P tests/check_skips.cmake
+if(NOT EXISTS "${JUNIT}")
+  message(FATAL_ERROR "check_skips: no ctest JUnit file '${JUNIT}' (ctest --output-junit)")
+endif()
+file(READ "${JUNIT}" xml)
+# One list item per test case (';' in a test's output would split the list).
+string(REPLACE ";" "," xml "${xml}")
+string(REPLACE "<testcase " ";<testcase " cases "${xml}")
+set(report "")
+set(count 0)
+foreach(case IN LISTS cases)
+  if(NOT case MATCHES "^<testcase name=\"([^\"]*)\"")
+    continue()
+  endif()
+  set(name "${CMAKE_MATCH_1}")
+  if(NOT case MATCHES "<skipped")
+    continue()
+  endif()
+  math(EXPR count "${count} + 1")
+  string(REGEX MATCHALL "SKIPPED: [^\n<]*" reasons "${case}")
+  if(NOT reasons)
+    set(reasons "(no SKIPPED line in its output)")
+  endif()
+  string(REPLACE ";" "\n    " reasons "${reasons}")
+  string(APPEND report "  ${name}:\n    ${reasons}\n")
+endforeach()
+if(count GREATER 0)
+  message(FATAL_ERROR "${count} test(s) skipped where every test must run (every optional part is "
+                      "installed by `make deps`):\n${report}")
+endif()
+message(STATUS "check_skips: no test skipped")
