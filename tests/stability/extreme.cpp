@@ -280,7 +280,11 @@ TEST_CASE("high dimension: S^16, S^32, H^16, H^32 to the method's order") {
   using SX = sesi::Sphere<Eigen::Dynamic, S>;
   using HX = sesi::Hyperbolic<Eigen::Dynamic, S>;
   high_dimension<true, sesi::Strang, SX>("sesi2", 2, 0.02);
-  high_dimension<true, sesi::Yoshida4, SX>("sesi4", 4, 0.1);
+  // sesi4 at dt = 0.025, in its asymptotic range (issue #24: order checks where the method is):
+  // S^16's free motion measures 4.56 at dt = 0.1, 4.25 at 0.05 and 4.00 at 0.025, since the
+  // re-chartings of the deep levels (polar-sine product below 1/4) fall on other steps at dt and
+  // dt/2; at 0.025 every case here measures 3.99-4.04.
+  high_dimension<true, sesi::Yoshida4, SX>("sesi4", 4, 0.025);
   high_dimension<false, sesi::Strang, HX>("sesi2", 2, 0.02);
-  high_dimension<false, sesi::Yoshida4, HX>("sesi4", 4, 0.1);
+  high_dimension<false, sesi::Yoshida4, HX>("sesi4", 4, 0.025);
 }

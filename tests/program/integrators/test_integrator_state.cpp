@@ -46,8 +46,11 @@ void expect_same(const FramedState& a, const FramedState& b) {
 }  // namespace
 
 TEST_CASE("a chart method's integrator refuses a state of another kind or size") {
-  for (const auto& [kind, dim] : {std::pair{SpaceKind::sphere, 2}, std::pair{SpaceKind::hyperbolic, 3},
-                                  std::pair{SpaceKind::euclidean, 2}, std::pair{SpaceKind::sphere, 9}}) {
+  // Plain variables, not structured bindings: CAPTURE's lambda cannot capture those in C++20 (clang).
+  for (const auto& space : {std::pair{SpaceKind::sphere, 2}, std::pair{SpaceKind::hyperbolic, 3},
+                            std::pair{SpaceKind::euclidean, 2}, std::pair{SpaceKind::sphere, 9}}) {
+    const SpaceKind kind = space.first;
+    const int dim = space.second;
     for (const char* method : {"sesi4", "sesi6-processed"}) {
       CAPTURE(dim);
       CAPTURE(method);
@@ -84,9 +87,11 @@ TEST_CASE("a geodesic method's integrator refuses a chart state") {
 TEST_CASE("a method switch starts from the post-processed state, not the kernel's variables") {
   // After steps of a processed method its framed state (kernel's variables) and its shown state
   // differ by the processor, O(dt^2); the next method must start exactly at the shown one.
-  for (const auto& [from, to] : {std::pair{"sesi6-processed", "sesi4"}, std::pair{"sesi8-processed", "sesi6-processed"},
-                                 std::pair{"geodesic6-processed", "geodesic4"},
-                                 std::pair{"geodesic8-processed", "geodesic6-processed"}}) {
+  for (const auto& change : {std::pair{"sesi6-processed", "sesi4"}, std::pair{"sesi8-processed", "sesi6-processed"},
+                             std::pair{"geodesic6-processed", "geodesic4"},
+                             std::pair{"geodesic8-processed", "geodesic6-processed"}}) {
+    const char* const from = change.first;
+    const char* const to = change.second;
     CAPTURE(from);
     CAPTURE(to);
     const Scene a = scene_on(SpaceKind::sphere, 3, from);
