@@ -8,10 +8,12 @@ JOBS        ?= $(shell nproc)
 # libbenchmark-dev the micro-benchmarks (`make microbench`, and a smoke test in `make test`);
 # python3-dev, python3-numpy, pybind11-dev and python3-pytest the Python package and its tests;
 # libopenmpi-dev and openmpi-bin `sesi sweep` across MPI ranks (its tests run mpirun with 1-3 ranks).
+# librandom123-dev the counter-based random numbers of the Langevin thermostat (header-only; the core
+# library needs Eigen alone, sesi/thermostat.hpp adds Random123).
 APT_PACKAGES := cmake g++ make libeigen3-dev libboost-dev doctest-dev libtomlplusplus-dev \
                 libcli11-dev python3-matplotlib clang libclang-rt-14-dev libbenchmark-dev \
                 libhdf5-dev python3-h5py python3-dev python3-numpy pybind11-dev python3-pytest \
-                libopenmpi-dev openmpi-bin
+                libopenmpi-dev openmpi-bin librandom123-dev
 
 .PHONY: deps configure build test demo clean fuzz figures microbench sweep-example
 

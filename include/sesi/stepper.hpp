@@ -50,6 +50,69 @@ struct unwrap<std::reference_wrapper<T>> {
   using type = T;
   static T& get(std::reference_wrapper<T> t) { return t.get(); }
 };
+
+/// The exact flow of level i for time h on body b, held in sc.q, sc.p, with body b's trig cache
+/// in ws when the chart has one (own_trig = false leaves level i's own entry stale): the one call
+/// of a level flow that every stepper makes.
+template <class Chart, class Scratch>
+void cached_level_flow(const Chart& chart, Workspace<Chart>& ws, int b, int i, typename Chart::Scalar m,
+                       typename Chart::Scalar h, Scratch& sc, bool own_trig = true) {
+  if constexpr (HasTrigCache<Chart>) {
+    chart.level_flow(i, sc.q, sc.p, m, h, ws.trig[static_cast<std::size_t>(b)], own_trig);
+  } else {
+    static_cast<void>(ws);
+    static_cast<void>(b);
+    static_cast<void>(own_trig);
+    level_flow(chart, i, sc.q, sc.p, m, h);
+  }
+}
+
+/// The last kick's gradient dV/dq and what it depended on (the system, the body frames, the
+/// cluster frame), so that a step whose first kick is at the point of the last step's last kick
+/// reuses it (first same as last, as odeint's velocity_verlet keeps its acceleration).
+template <class Chart>
+class KeptGradient {
+  using state_type = State<Chart>;
+
+ public:
+  /// The matrix the last kick wrote (kick_cached's gradient argument).
+  typename state_type::Matrix& gradient() { return grad_; }
+  /// Whether the kept gradient is the one at x for sys (q_unchanged: x.q is the last step's).
+  template <class Sys>
+  bool valid(const Sys& sys, const state_type& x, bool q_unchanged) const {
+    return q_unchanged && grad_.cols() == x.p.cols() && grad_.rows() == x.p.rows() && same_system(sys) &&
+           frames_ == x.frames && clustered_ == x.clustered && (!x.clustered || cluster_ == x.cluster);
+  }
+  /// Record what the gradient just computed into gradient() depends on.
+  template <class Sys>
+  void keep(const Sys& sys, const state_type& x) {
+    system_ = &sys;
+    if constexpr (requires { sys.instance(); }) instance_ = sys.instance();
+    frames_ = x.frames;
+    clustered_ = x.clustered;
+    if (x.clustered) cluster_ = x.cluster;
+  }
+  void forget() { system_ = nullptr; }
+
+ private:
+  /// Whether sys is the system of the kept gradient: by its stamp (sesi::System), else by its
+  /// address (a system whose parameters change in place needs reset()).
+  template <class Sys>
+  bool same_system(const Sys& sys) const {
+    if constexpr (requires { sys.instance(); }) {
+      return system_ != nullptr && instance_ == sys.instance();
+    } else {
+      return system_ == static_cast<const void*>(&sys);
+    }
+  }
+
+  typename state_type::Matrix grad_;
+  const void* system_ = nullptr;
+  std::uint64_t instance_ = 0;  // sesi::System's stamp: its address is no identity
+  std::vector<typename state_type::Frame> frames_;
+  bool clustered_ = false;  // and the cluster frame (State::cluster) it was taken in
+  typename state_type::Frame cluster_ = state_type::identity_frame();
+};
 }  // namespace detail
 
 /// A symmetric composition of the base step over the weights of Table (coefficients.hpp), or,
@@ -119,7 +182,7 @@ class Composition {
   /// (another sesi::System object, even at the address of the last one).
   void reset() {
     last_q_.resize(0, 0);
-    grad_system_ = nullptr;
+    kept_.forget();
   }
 
  private:
@@ -127,13 +190,7 @@ class Composition {
   /// own_trig = false leaves level i's own entry stale, see step_dkd).
   template <class Scratch>
   void flow(const Chart& chart, int b, int i, Scalar m, Scalar h, Scratch& sc, bool own_trig = true) {
-    if constexpr (HasTrigCache<Chart>) {
-      chart.level_flow(i, sc.q, sc.p, m, h, ws_.trig[static_cast<std::size_t>(b)], own_trig);
-    } else {
-      static_cast<void>(b);
-      static_cast<void>(own_trig);
-      level_flow(chart, i, sc.q, sc.p, m, h);
-    }
+    detail::cached_level_flow(chart, ws_, b, i, m, h, sc, own_trig);
   }
   /// Apply f(b, m, scratch) to every body b, loaded into scratch.q, scratch.p and stored back;
   /// on threads for many bodies (each body's flows touch only its own data).
@@ -199,16 +256,14 @@ class Composition {
   void step_kdk(const Sys& sys, state_type& x, Scalar dt, bool q_unchanged) {
     const int top = sys.dim() - 1;
     const std::size_t s = w_.size();
-    const bool reuse = q_unchanged && grad_.cols() == x.p.cols() && grad_.rows() == x.p.rows() &&
-                       same_system(sys) && grad_frames_ == x.frames &&
-                       grad_clustered_ == x.clustered && (!x.clustered || grad_cluster_ == x.cluster);
+    const bool reuse = kept_.valid(sys, x, q_unchanged);
     Scalar pending = w_[0] * dt / Scalar(2);  // half kick carried over from the last stage
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar h = w_[k] * dt;
       if (k == 0 && reuse) {
-        x.p.noalias() -= pending * grad_;
+        x.p.noalias() -= pending * kept_.gradient();
       } else {
-        sys.kick_cached(x, pending, ws_, grad_);
+        sys.kick_cached(x, pending, ws_, kept_.gradient());
       }
       // Kinetic part: K_1(h/2)..K_{n-1}(h/2) K_n(h) K_{n-1}(h/2)..K_1(h/2).
       if (top == 0) {
@@ -220,35 +275,15 @@ class Composition {
       }
       pending = h / Scalar(2) + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
     }
-    sys.kick_cached(x, pending, ws_, grad_);
-    grad_system_ = &sys;
-    if constexpr (requires { sys.instance(); }) grad_instance_ = sys.instance();
-    grad_frames_ = x.frames;
-    grad_clustered_ = x.clustered;
-    if (x.clustered) grad_cluster_ = x.cluster;
+    sys.kick_cached(x, pending, ws_, kept_.gradient());
+    kept_.keep(sys, x);
   }
 
   weights_type w_;
   [[no_unique_address]] std::conditional_t<runtime_table, order_type, std::monostate> order_{};
   Workspace<Chart> ws_;
   typename state_type::Matrix last_q_;  // q after the last step: its trig is in ws_
-  // The kick-drift-kick form's last gradient: dV/dq at last_q_, for that system and frames.
-  typename state_type::Matrix grad_;
-  const void* grad_system_ = nullptr;
-  std::uint64_t grad_instance_ = 0;  // sesi::System's stamp: its address is no identity
-  /// Whether sys is the system of the kept gradient: by its stamp (sesi::System), else by its
-  /// address (a system whose parameters change in place needs reset()).
-  template <class Sys>
-  bool same_system(const Sys& sys) const {
-    if constexpr (requires { sys.instance(); }) {
-      return grad_system_ != nullptr && grad_instance_ == sys.instance();
-    } else {
-      return grad_system_ == static_cast<const void*>(&sys);
-    }
-  }
-  std::vector<typename state_type::Frame> grad_frames_;
-  bool grad_clustered_ = false;  // and the cluster frame (State::cluster) it was taken in
-  typename state_type::Frame grad_cluster_ = state_type::identity_frame();
+  detail::KeptGradient<Chart> kept_;  // the kick-drift-kick form's last gradient, at last_q_
 };
 
 /// The methods by their tables' authors (citations in coefficients.hpp).
