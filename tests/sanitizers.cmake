@@ -8,6 +8,12 @@
 # untrusted. With stability and many-body tests in, a fresh-clone `make test` took over an hour
 # on two cores (CI's budget is 45 minutes).
 set(dir ${WORK_DIR})
+# The outer build's Python (the Makefile's Debian python3, with pytest and h5py), not whichever
+# python3 comes first in PATH.
+set(python_arg "")
+if(PYTHON)
+  set(python_arg "-DPython3_EXECUTABLE=${PYTHON}")
+endif()
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
   if(NOT rc EQUAL 0)
@@ -31,7 +37,8 @@ run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${dir} -G "Unix Makefiles"
     -D SESI_BUILD_BENCHMARKS=OFF
     -D SESI_BUILD_PYTHON=OFF
     -D SESI_TEST_PARTS=core,program,bench
-    -D SESI_REQUIRE_ALL_TESTS=${REQUIRE_ALL})
+    -D SESI_REQUIRE_ALL_TESTS=${REQUIRE_ALL}
+    ${python_arg})
 run(${CMAKE_COMMAND} --build ${dir} -j ${JOBS})
 run(${CMAKE_CTEST_COMMAND} --test-dir ${dir} --output-on-failure -j ${JOBS} -LE long
     --output-junit ${dir}/ctest-junit.xml)
