@@ -106,6 +106,10 @@ figures: deps
 	  | tee $(BENCH_OUT)/scaling-report.txt
 	$(PYTHON3) tools/plot_scaling.py $(BENCH_OUT)/scaling-s3 $(BENCH_OUT)/scaling-h2 \
 	  $(BENCH_OUT)/scaling-gravity-s2 --figure docs/figures/scaling-others.png --markdown | tee -a $(BENCH_OUT)/scaling-report.txt
+	@# Matter at a temperature (issue #25): a Lennard-Jones liquid on S^2 quenched by a Langevin
+	@# thermostat, g(r) at three temperatures (sesi analyze; docs/observables.md).
+	$(PYTHON3) tools/lj_quench.py --sesi $(BENCH_DIR)/src/sesi --out $(BENCH_OUT)/lj-quench \
+	  --figure docs/figures/lj-quench-g-r.png | tee $(BENCH_OUT)/lj-quench-report.txt
 	@# Sweeps (issue #16): the chaos map of docs/sweeps.md.
 	$(MAKE) --no-print-directory sweep-example RELEASE_DIR=$(BENCH_DIR)
 

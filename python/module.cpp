@@ -19,6 +19,8 @@
 #include "methods.hpp"
 #include "method_list.hpp"
 #include "scene_reader.hpp"
+#include "scene_table.hpp"
+#include "validate.hpp"
 #include "simulation.hpp"
 
 namespace py = pybind11;
@@ -99,10 +101,41 @@ py::array_t<double> stack(const std::vector<Eigen::MatrixXd>& rows, Eigen::Index
   return out;
 }
 
+/// A [thermostat] table read by the scene reader (the program's checks and messages).
+sesi::program::ThermostatSpec thermostat_of(py::handle dict, const std::string& source) {
+  if (!py::isinstance<py::dict>(dict)) {
+    throw sesi::program::InputError("thermostat: expected a sesi.Thermostat, a dict of the [thermostat] keys or None");
+  }
+  return sesi::program::read_thermostat_table(to_table(dict, "thermostat"), source);
+}
+
+/// A ThermostatSpec as the dict of its [thermostat] keys (temperature a number when constant).
+py::dict thermostat_dict(const sesi::program::ThermostatSpec& th) {
+  py::dict d;
+  d["kind"] = th.kind;
+  if (th.schedule.size() == 1 && th.schedule.front().first == 0.0) {
+    d["temperature"] = th.schedule.front().second;
+  } else {
+    py::list knots;
+    for (const auto& [t, kT] : th.schedule) knots.append(py::make_tuple(t, kT));
+    d["temperature"] = knots;
+  }
+  for (std::string_view key : sesi::program::thermostat_keys(th.kind)) {
+    if (key == "gamma") d["gamma"] = th.gamma;
+    if (key == "tau") d["tau"] = th.tau;
+    if (key == "chain") d["chain"] = th.chain;
+    if (key == "seed") d["seed"] = th.seed;
+  }
+  return d;
+}
+
 }  // namespace
+
+void sesi_bind_analysis(py::module_& m);  // analysis.cpp: g(r), MSD, VACF (sesi.analysis)
 
 PYBIND11_MODULE(_sesi, m) {
   m.doc() = "sesi's compiled core; use the package `sesi` (docs/python.md).";
+  sesi_bind_analysis(m);
 
   static py::exception<sesi::program::InputError> input_error(m, "InputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
@@ -161,6 +194,20 @@ PYBIND11_MODULE(_sesi, m) {
         const auto x = exact.position(b, static_cast<long double>(times[k]));
         for (int c = 0; c < 3; ++c) view(static_cast<py::ssize_t>(k), b, c) = static_cast<double>(x(c));
       }
+    }
+    return out;
+  });
+
+  // A [thermostat] dict checked as a scene file's table, back with its defaults (sesi.Thermostat).
+  m.def("thermostat_keys", [](py::dict d, const std::string& source) { return thermostat_dict(thermostat_of(d, source)); });
+  m.def("thermostat_kinds", [] {
+    py::list out;
+    for (std::string_view kind : sesi::program::thermostat_kinds()) {
+      py::list keys;
+      for (std::string_view key : sesi::program::thermostat_keys(kind)) {
+        if (key != "kind") keys.append(std::string(key));
+      }
+      out.append(py::make_tuple(std::string(kind), keys));
     }
     return out;
   });
@@ -226,6 +273,14 @@ PYBIND11_MODULE(_sesi, m) {
       .def("set_energy_guard", &Simulation::set_energy_guard)
       .def("set_threads", &Simulation::set_threads)
       .def("set_check_every", &Simulation::set_check_every)
+      .def("set_thermostat", [](Simulation& s, py::object value) {
+        if (value.is_none()) return s.set_thermostat(std::nullopt);
+        s.set_thermostat(thermostat_of(value, "<simulation>"));
+      })
+      .def_property_readonly("thermostat", [](const Simulation& s) -> py::object {
+        if (!s.scene().thermostat) return py::none();
+        return thermostat_dict(*s.scene().thermostat);
+      })
       .def("integrate", [](Simulation& s, double t) {
         const sesi::python::Report report = s.advance(t, std::numeric_limits<long>::max(), nullptr);
         if (report.interrupted) throw py::error_already_set();  // the KeyboardInterrupt raised at Ctrl-C

@@ -145,6 +145,7 @@ void Simulation::set_method(const std::string& method) {
   const std::string before = scene_.integrator.method;
   scene_.integrator.method = method;
   try {
+    program::check_thermostat_method(scene_, option, "method");  // a thermostat: sesi2 only
     rebuild();  // refuses a geodesic method on E^n
   } catch (...) {
     scene_.integrator.method = before;
@@ -170,6 +171,19 @@ void Simulation::set_threads(long threads) {
 void Simulation::set_check_every(long check_every) {
   if (check_every != 0) program::check_check_every(check_every, option, "check_every");
   scene_.integrator.check_every = check_every;
+}
+
+void Simulation::set_thermostat(std::optional<program::ThermostatSpec> thermostat) {
+  std::optional<program::ThermostatSpec> before = std::move(scene_.thermostat);
+  scene_.thermostat = std::move(thermostat);
+  try {
+    program::check_thermostat_method(scene_, option, "method");
+    rebuild();
+  } catch (...) {
+    scene_.thermostat = std::move(before);
+    throw;
+  }
+  start_ = program::guard_reference(scene_, *integrator_);
 }
 
 void Simulation::first_row(Rows& rows) const {

@@ -6,6 +6,7 @@
 /// (sesi/__init__.py) builds the document and turns a run's report into exceptions.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,10 @@ class Simulation {
   void set_energy_guard(double threshold);  ///< 0: off
   void set_threads(long threads);
   void set_check_every(long check_every);  ///< 0: the default cadence
+  /// A thermostat (none: constant energy) from the next step on, at the current state; checked
+  /// with the method (sesi2 only) as a scene file's [thermostat] is. The energy guard's reference
+  /// becomes the current state (a new thermostat's conserved quantity starts there).
+  void set_thermostat(std::optional<program::ThermostatSpec> thermostat);
 
   /// Step to time `target` on the grid t + k dt (the last step shortened), keeping a row every
   /// output_every steps in rows when rows is given. The GIL is released while stepping; Ctrl-C

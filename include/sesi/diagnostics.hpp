@@ -13,6 +13,14 @@
 /// velocities are mapped by C last (relative accuracy eps whatever C's size), and the momentum
 /// map, a sum of O(1) local terms, is formed in the cluster's frame and moved to the world as
 /// M = C M_local C^T (the adjoint action of the isometry; no world point enters the sum).
+///
+/// The configurational temperature kT_conf = sum_b |grad_b V|^2 / sum_b Delta_b V (Rugh, PRL 78,
+/// 772 (1997); Butler, Ayton, Jepps, Evans, J. Chem. Phys. 109, 6519 (1998)) with the space's
+/// gradient and Laplace-Beltrami operator: the canonical measure's position marginal is
+/// exp(-V/kT) dvol_g whatever the masses, so integration by parts gives
+/// <|grad V|^2> = kT <Delta V>.
+
+#include <array>
 
 #include <Eigen/Core>
 
@@ -116,6 +124,37 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, 1> momentum_map(
     }
   }
   return out;
+}
+
+/// {sum_b |grad_b V|^2, sum_b Delta_b V} at x, in the space's metric (see the file comment), for
+/// averaging over rows: kT_conf = <first> / <second>. |grad_b V|^2 = g^ij dV/dq_i dV/dq_j of
+/// the total chart gradient of body b (through its frame, if any): the chart's kinetic energy
+/// p^T g^-1 p / 2m at p = dV/dq and m = 1/2. The Laplacian is System::laplacian_sum: NaN where a
+/// term has no Laplacian (a user's External, ChartPotential or make_pair term). Both sums in
+/// body order: the same bits for any thread count.
+template <class Sys>
+std::array<typename Sys::Scalar, 2> configurational_sums(const Sys& sys, const typename Sys::StateType& x) {
+  using Scalar = typename Sys::Scalar;
+  auto w = sys.make_workspace();
+  typename Sys::StateType::Matrix grad;
+  sys.potential_gradient(x, w, grad);
+  typename Sys::Chart::Point q(sys.dim()), g(sys.dim());
+  Scalar g2(0);
+  for (int b = 0; b < sys.bodies(); ++b) {
+    q = x.q.col(b);
+    g = grad.col(b);
+    g2 += kinetic_energy(sys.chart(), q, g, Scalar(0.5));
+  }
+  return {g2, sys.laplacian_sum(x, w)};
+}
+
+/// kT_conf = sum_b |grad_b V|^2 / sum_b Delta_b V at x (k_B = 1; configurational_sums). One
+/// configuration's ratio is noisy: average the two sums over rows before dividing. NaN where a
+/// term has no Laplacian, and without a potential (0 / 0).
+template <class Sys>
+typename Sys::Scalar configurational_temperature(const Sys& sys, const typename Sys::StateType& x) {
+  const auto sums = configurational_sums(sys, x);
+  return sums[0] / sums[1];
 }
 
 }  // namespace sesi

@@ -9,6 +9,12 @@
 ///    |x_i - x_j|: value(space, d, m_i, m_j) and derivative(space, d, m_i, m_j) = dW/dd.
 /// A user term is any small type with those members, or a pair of lambdas wrapped by
 /// make_external / make_pair.
+///
+/// The configurational temperature (diagnostics.hpp) also needs each term's Laplace-Beltrami
+/// operator: an optional laplacian(space, x, m) of an external term (laplacian(space, q, m) of a
+/// ChartTerm), and an optional second_derivative(space, d, m_i, m_j) = d^2W/dd^2 of a pair term
+/// (the System adds the curvature's part, special::radial_laplacian, chord_laplacian). The
+/// built-in terms have them; a term without one makes the Laplacian sum NaN.
 
 #include <cmath>
 #include <concepts>
@@ -140,6 +146,19 @@ class ChordWell {
     const Scalar a = sqrt(Scalar(1) - s * s);
     return strength_ * Scalar(2) * (a - cos_theta0_) * (cos_theta0_ - Scalar(1) / a) / (s * s * s) * k;
   }
+  /// d^2W/ds^2 = 2 (w'^2 + w w'') of w = (a - c0)/s, with w' = (c0 - 1/a)/s^2 and
+  /// w'' = -1/(a^3 s) - 2 (c0 - 1/a)/s^3 (a' = -s/a); times k^2 for the chord.
+  template <class Space>
+  Scalar second_derivative(const Space& space, Scalar chord, Scalar, Scalar) const {
+    using std::sqrt;
+    const Scalar k = scale(space);
+    const Scalar s = chord * k;
+    const Scalar s2 = s * s;
+    const Scalar a = sqrt(Scalar(1) - s2);
+    const Scalar u = cos_theta0_ - Scalar(1) / a;  // s^2 w'
+    const Scalar v = a - cos_theta0_;              // s w
+    return strength_ * Scalar(2) * ((u * u - Scalar(2) * v * u) / (s2 * s2) - v / (a * a * a * s2)) * k * k;
+  }
 
  private:
   /// 1 / (sqrt(3) R): s = chord / (sqrt(3) R).
@@ -179,6 +198,11 @@ struct CotangentGravity {
   Scalar derivative(const Space& space, Scalar d, Scalar mi, Scalar mj) const {
     return -G * mi * mj * special::ctn_derivative(space.curvature(), d);
   }
+  /// d^2W/dd^2 = -G m_i m_j ctn''(d), ctn'' = 2 cs / sn^3.
+  template <class Space>
+  Scalar second_derivative(const Space& space, Scalar d, Scalar mi, Scalar mj) const {
+    return -G * mi * mj * special::ctn_second_derivative(space.curvature(), d);
+  }
   /// The algebraic form (AlgebraicPairTerm): ctn(d) = cs / sn on S^n, H^n and E^n alike, and
   /// d ctn / dd = -1 / sn^2 (cot(d/R)/R, coth(d/R)/R and 1/d differentiated; sn = R sin(d/R),
   /// R sinh(d/R), d).
@@ -194,6 +218,10 @@ struct CotangentGravity {
   template <class Space>
   Scalar derivative_over_sn(const Space&, const PairGeometry<Scalar>& g, Scalar mi, Scalar mj) const {
     return (G * mi * mj) / (g.sn * g.sn * g.sn);
+  }
+  template <class Space>
+  Scalar second_derivative(const Space&, const PairGeometry<Scalar>& g, Scalar mi, Scalar mj) const {
+    return -G * mi * mj * Scalar(2) * g.cs() / (g.sn * g.sn * g.sn);
   }
 };
 
@@ -211,6 +239,10 @@ struct HarmonicPair {
   template <class Space>
   Scalar derivative(const Space&, Scalar d, Scalar, Scalar) const {
     return k * (d - d0);
+  }
+  template <class Space>
+  Scalar second_derivative(const Space&, Scalar, Scalar, Scalar) const {
+    return k;
   }
 };
 
@@ -255,6 +287,16 @@ struct LennardJones {
     const Scalar s6 = s2 * s2 * s2;
     return Scalar(-24) * epsilon * (Scalar(2) * s6 * s6 - s6) / d;
   }
+  /// d^2W/dd^2 = 24 eps (26 (sigma/d)^12 - 7 (sigma/d)^6) / d^2 inside the cutoff. The force's
+  /// jump at the cutoff is a surface term of the Laplacian that no pair function gives: the
+  /// configurational temperature omits it (docs/concepts.md).
+  template <class Space>
+  Scalar second_derivative(const Space&, Scalar d, Scalar, Scalar) const {
+    if (!(d < cutoff)) return Scalar(0);
+    const Scalar s2 = sigma * sigma / (d * d);
+    const Scalar s6 = s2 * s2 * s2;
+    return Scalar(24) * epsilon * (Scalar(26) * s6 * s6 - Scalar(7) * s6) / (d * d);
+  }
 };
 
 /// The curved Kepler problem: V = -k m ctn(d(x, center)) (Kozlov & Harin; Cariñena et al.).
@@ -282,6 +324,15 @@ struct CentralCotangent {
     const Scalar d = space.distance(x, center);
     space.distance_gradient(x, center, g);
     g *= -k * m * special::ctn_derivative(space.curvature(), d);
+  }
+  /// Delta V = -k m Delta ctn(d) = -k m (3 - n) cs / sn^3 (special::radial_laplacian with
+  /// ctn' = -1/sn^2, ctn'' = 2 cs / sn^3): zero on S^3, H^3 and E^3, where ctn is harmonic.
+  Scalar laplacian(const Space& space, const typename Space::Ambient& x, Scalar m) const {
+    const Scalar d = space.distance(x, center);
+    const Scalar kappa = space.curvature();
+    return special::radial_laplacian(dim_of(space), special::sn(kappa, d), special::cs(kappa, d),
+                                     -k * m * special::ctn_derivative(kappa, d),
+                                     -k * m * special::ctn_second_derivative(kappa, d));
   }
 };
 

@@ -88,7 +88,7 @@ std::vector<Scalar> inverse_processor(const Weights& g) {
 /// (weights, order) constructor and do_step, e.g. the embedding's geodesic splitting
 /// (sesi::reference::GeodesicProcessed, reference/embedding.hpp).
 template <class Table, HierarchicalChart Chart, Splitting Form = Splitting::drift_kick_drift,
-          template <class, class, Splitting> class Engine = Composition>
+          template <class, class, Splitting, class...> class Engine = Composition>
 class Processed {
   static constexpr bool runtime_table = std::is_same_v<Table, coefficients::Runtime>;
   static_assert(runtime_table || ProcessedTable<Table>,

@@ -134,4 +134,40 @@ Scalar ctn_derivative(Scalar kappa, Scalar d) {
   return -Scalar(1) / (s * s);
 }
 
+/// d^2/dd^2 ctn(d) = 2 cs(d) / sn(d)^3 (from ctn' = -1/sn^2 and sn' = cs). Singular where sn = 0.
+template <class Scalar>
+Scalar ctn_second_derivative(Scalar kappa, Scalar d) {
+  const Scalar s = sn(kappa, d);
+  SESI_CHECK(s != Scalar(0), "ctn'' evaluated at a singular distance");
+  return Scalar(2) * cs(kappa, d) / (s * s * s);
+}
+
+/// The Laplace-Beltrami operator of a radial function f of the geodesic distance d to a point,
+/// on an n-dimensional space of constant curvature, in geodesic polar coordinates, where the volume
+/// element is sn(d)^(n-1) dd dOmega (Chavel, Eigenvalues in Riemannian Geometry, 1984, ch. II):
+///   Delta f = sn^(1-n) (sn^(n-1) f')' = f''(d) + (n - 1) ctn(d) f'(d),  ctn = cs / sn,
+/// from sn = sn(d), cs = cs(d) (a PairGeometry gives both without a transcendental function),
+/// f1 = f'(d) and f2 = f''(d). Singular where sn = 0 (d = 0, and d = pi R on S^n): a function
+/// smooth there has f' -> 0 like f'' (d - d_0), so ctn f' -> f'' and Delta f -> n f''; at sn = 0
+/// the helper returns that limit when f1 = 0, NaN otherwise (a cone has no Laplacian there).
+template <class Scalar>
+Scalar radial_laplacian(int n, Scalar sn, Scalar cs, Scalar f1, Scalar f2) {
+  if (sn == Scalar(0)) return f1 == Scalar(0) ? Scalar(n) * f2 : std::numeric_limits<Scalar>::quiet_NaN();
+  return f2 + Scalar(n - 1) * cs * f1 / sn;
+}
+
+/// The Laplace-Beltrami operator of a function f of the chord c to a point (c = 2R sin(d/2R) on
+/// S^n, the Minkowski chord 2R sinh(d/2R) on H^n, d on E^n; kappa = 1/R^2, -1/R^2, 0):
+///   Delta f = f''(c) |grad c|^2 + f'(c) Delta c,  |grad c|^2 = 1 - kappa c^2 / 4,
+///   Delta c = (n - 1) / c - (2n - 1) kappa c / 4,
+/// radial_laplacian's formula for c(d) = 2 sn(d/2): c' = cs(d/2), c'' = -kappa c / 4 and
+/// ctn(d) c' = (1 - kappa c^2 / 2) / c. Regular at the antipode of S^n (c = 2R); singular at
+/// c = 0, where as radial_laplacian it returns n f'' when f1 = 0, NaN otherwise.
+template <class Scalar>
+Scalar chord_laplacian(Scalar kappa, int n, Scalar c, Scalar f1, Scalar f2) {
+  if (c == Scalar(0)) return f1 == Scalar(0) ? Scalar(n) * f2 : std::numeric_limits<Scalar>::quiet_NaN();
+  const Scalar q = kappa * c / Scalar(4);
+  return f2 * (Scalar(1) - q * c) + f1 * (Scalar(n - 1) / c - Scalar(2 * n - 1) * q);
+}
+
 }  // namespace sesi::special

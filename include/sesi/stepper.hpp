@@ -16,6 +16,20 @@
 ///    energy error bounded. Kicks where two stages meet fuse, and the first kick of a step
 ///    reuses the last gradient of the step before: one force evaluation per stage.
 ///
+/// A Stage (the 4th template parameter; default NoStage, which compiles away) adds a
+/// thermostat's stages to the kick-drift-kick Strang step (thermostat.hpp, docs/thermostats.md):
+///  - an outer hook at the step's start and end, acting on all momenta through the total kinetic
+///    energy (a Nose-Hoover chain's or a velocity rescale's half step);
+///  - a per-body hook between the two halves of the top level's flow (Langevin's O: BAOAB).
+/// Neither moves q, so the kept gradient stays valid: one force evaluation per step with any stage.
+/// The stage's interface (the engine's only calls to it):
+///   Scalar time_step(Scalar dt)             the engine's step h for a time step dt
+///   bool acts_on_total(), acts_on_bodies()  which hooks run this step
+///   total(sys, x, ws, h, which)             outer hook over time h, which = 0 (start) or 1 (end)
+///   begin_bodies(n, h); body(chart, b, m, q, p); end_bodies()   the per-body hook, body by body
+///                                           (on threads: body() writes only body b's data)
+///   end_step()                              after the step (the stage's step counter)
+///
 /// Steppers model odeint's Stepper concept (order(), do_step(sys, x, t, dt), the usual types);
 /// sesi/odeint.hpp adds the stepper_category tag so that integrate_const drives them.
 
@@ -37,6 +51,9 @@ namespace sesi {
 /// Which form of the base step: drift-kick-drift (the seed's; kinetic half flows outside) or
 /// kick-drift-kick (potential half kicks outside; on E^n this is velocity Verlet).
 enum class Splitting { drift_kick_drift, kick_drift_kick };
+
+/// The composition engine's default stage: none (the NVE step; every hook compiles away).
+struct NoStage {};
 
 namespace detail {
 template <class T>
@@ -117,11 +134,15 @@ class KeptGradient {
 
 /// A symmetric composition of the base step over the weights of Table (coefficients.hpp), or,
 /// with Table = coefficients::Runtime, over weights given at run time (same engine, same
-/// operations: the two step bit for bit alike).
+/// operations: the two step bit for bit alike). Stage: a thermostat's stages (see above; the
+/// kick-drift-kick form with the 1-stage Strang table only).
 template <class Table, HierarchicalChart Chart,
-          Splitting Form = Splitting::drift_kick_drift>
+          Splitting Form = Splitting::drift_kick_drift, class Stage = NoStage>
 class Composition {
   static constexpr bool runtime_table = std::is_same_v<Table, coefficients::Runtime>;
+  static constexpr bool staged = !std::is_same_v<Stage, NoStage>;
+  static_assert(!staged || Form == Splitting::kick_drift_kick,
+                "sesi: a stage (thermostat) runs in the kick-drift-kick form only");
 
  public:
   using Scalar = typename Chart::Scalar;
@@ -138,10 +159,22 @@ class Composition {
   static constexpr order_type order_value = Table::order;
 
   Composition() requires(!runtime_table) : w_(Table::template weights<Scalar>()) {}
+  /// A fixed table with a stage (a thermostat).
+  explicit Composition(Stage stage) requires(!runtime_table && staged)
+      : w_(Table::template weights<Scalar>()), stage_(std::move(stage)) {
+    check_stage();
+  }
   /// A runtime table: palindromic weights summing to 1, of the given order.
   Composition(std::vector<Scalar> weights, order_type order) requires runtime_table
       : w_(std::move(weights)), order_(order) {
     SESI_CHECK(!w_.empty(), "a composition needs at least one stage");
+    check_stage();
+  }
+  /// A runtime table with a stage (a thermostat).
+  Composition(std::vector<Scalar> weights, order_type order, Stage stage) requires(runtime_table && staged)
+      : w_(std::move(weights)), order_(order), stage_(std::move(stage)) {
+    SESI_CHECK(!w_.empty(), "a composition needs at least one stage");
+    check_stage();
   }
   /// A runtime-table composition with the weights and order of a fixed table T.
   template <class T>
@@ -149,6 +182,16 @@ class Composition {
     const auto w = T::template weights<Scalar>();
     return Composition(std::vector<Scalar>(w.begin(), w.end()), T::order);
   }
+  /// The same with a stage (a thermostat).
+  template <class T>
+  static Composition of(Stage stage) requires(runtime_table && staged) {
+    const auto w = T::template weights<Scalar>();
+    return Composition(std::vector<Scalar>(w.begin(), w.end()), T::order, std::move(stage));
+  }
+
+  /// The stage (a thermostat: its temperature, step counter, heat).
+  Stage& stage() requires staged { return stage_; }
+  const Stage& stage() const requires staged { return stage_; }
 
   order_type order() const {
     if constexpr (runtime_table) {
@@ -214,6 +257,10 @@ class Composition {
       x.p.col(b) = sc.p;
     });
   }
+  /// A stage's hooks sit in the 1-stage (Strang) step: thermostats run with that table only.
+  void check_stage() const {
+    if constexpr (staged) SESI_CHECK(w_.size() == 1, "a thermostat runs with the 1-stage Strang table only");
+  }
   /// Forward level flows on every body: level 0 for time h0, levels 1..last for time h.
   template <class Sys>
   void forward(const Sys& sys, state_type& x, Scalar h0, Scalar h, int last) {
@@ -251,12 +298,22 @@ class Composition {
 
   /// The kick-drift-kick form. Its first kick is at the point of the last step's last kick, so
   /// it reuses that kick's gradient when nothing it depends on changed (first same as last, as
-  /// odeint's velocity_verlet keeps its acceleration): one force evaluation per stage.
+  /// odeint's velocity_verlet keeps its acceleration): one force evaluation per stage. With a
+  /// stage: its outer hook before the first kick and after the last (NHC(h/2) step NHC(h/2)),
+  /// its per-body hook between the two halves of the top level's flow (B A O A B).
   template <class Sys>
   void step_kdk(const Sys& sys, state_type& x, Scalar dt, bool q_unchanged) {
     const int top = sys.dim() - 1;
     const std::size_t s = w_.size();
     const bool reuse = kept_.valid(sys, x, q_unchanged);
+    bool outer = false, inner = false;
+    if constexpr (staged) {
+      dt = stage_.time_step(dt);  // Brownian dynamics: the BAOAB limit's h for a time step dt
+      outer = stage_.acts_on_total();
+      inner = stage_.acts_on_bodies();
+      if (outer) stage_.total(sys, x, ws_, dt / Scalar(2), 0);
+      if (inner) stage_.begin_bodies(sys.bodies(), dt);
+    }
     Scalar pending = w_[0] * dt / Scalar(2);  // half kick carried over from the last stage
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar h = w_[k] * dt;
@@ -265,18 +322,43 @@ class Composition {
       } else {
         sys.kick_cached(x, pending, ws_, kept_.gradient());
       }
-      // Kinetic part: K_1(h/2)..K_{n-1}(h/2) K_n(h) K_{n-1}(h/2)..K_1(h/2).
-      if (top == 0) {
-        forward(sys, x, h, h, 0);
-      } else {
-        forward(sys, x, h / Scalar(2), h / Scalar(2), top - 1);
-        each_body(sys, x, [&](int b, Scalar m, auto& sc) { flow(sys.chart(), b, top, m, h, sc); });
-        backward(sys, x, h / Scalar(2), h / Scalar(2), top - 1);
-      }
+      // Kinetic part, one pass body by body (each body's flows touch only its own data):
+      // K_1(h/2)..K_{n-1}(h/2) K_n(h) K_{n-1}(h/2)..K_1(h/2); with the per-body hook O,
+      // K_1(h/2)..K_n(h/2) O K_n(h/2)..K_1(h/2). Level 0 skips a zero time (as ever).
+      const Scalar half = h / Scalar(2);
+      each_body(sys, x, [&](int b, Scalar m, auto& sc) {
+        const Chart& chart = sys.chart();
+        if (top == 0 && !inner) {
+          if (h != Scalar(0)) flow(chart, b, 0, m, h, sc);
+          return;
+        }
+        if (half != Scalar(0)) flow(chart, b, 0, m, half, sc);
+        for (int i = 1; i < top; ++i) flow(chart, b, i, m, half, sc);
+        if constexpr (staged) {
+          if (inner) {
+            // The first half leaves the top level's own sine stale: no flow of this body reads
+            // it before the second half refreshes it (the hook reads q itself).
+            if (top > 0) flow(chart, b, top, m, half, sc, /*own_trig=*/false);
+            stage_.body(chart, b, m, sc.q, sc.p);
+            if (top > 0) flow(chart, b, top, m, half, sc);
+          } else {
+            flow(chart, b, top, m, h, sc);
+          }
+        } else {
+          flow(chart, b, top, m, h, sc);
+        }
+        for (int i = top - 1; i >= 1; --i) flow(chart, b, i, m, half, sc);
+        if (half != Scalar(0)) flow(chart, b, 0, m, half, sc);
+      });
       pending = h / Scalar(2) + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
     }
     sys.kick_cached(x, pending, ws_, kept_.gradient());
     kept_.keep(sys, x);
+    if constexpr (staged) {
+      if (inner) stage_.end_bodies();
+      if (outer) stage_.total(sys, x, ws_, dt / Scalar(2), 1);
+      stage_.end_step();
+    }
   }
 
   weights_type w_;
@@ -284,6 +366,7 @@ class Composition {
   Workspace<Chart> ws_;
   typename state_type::Matrix last_q_;  // q after the last step: its trig is in ws_
   detail::KeptGradient<Chart> kept_;  // the kick-drift-kick form's last gradient, at last_q_
+  [[no_unique_address]] Stage stage_{};
 };
 
 /// The methods by their tables' authors (citations in coefficients.hpp).

@@ -394,7 +394,148 @@ class System {
     }
   }
 
+  /// sum_b Delta_b V at s: the Laplace-Beltrami operator of the potential in each body's
+  /// position, in the space's metric, summed over the bodies (a pair term counts at both of its
+  /// bodies); the denominator of the configurational temperature (diagnostics.hpp). Pair terms
+  /// by rows (each body sums its partners in ascending order, through the Verlet list of a
+  /// short-range term), the rows in body order: the same bits for any thread count. NaN when a
+  /// term has no Laplacian (potentials.hpp: laplacian, second_derivative) or, for pair terms,
+  /// the chart has no curvature().
+  Scalar laplacian_sum(const StateType& s, Workspace& w) const {
+    if constexpr (!has_potential) {
+      static_cast<void>(s);
+      static_cast<void>(w);
+      return Scalar(0);
+    } else {
+      if constexpr (has_embedded_terms) embed_all(s, w);
+      Scalar v(0);
+      int index = 0;
+      std::apply([&](const auto&... term) { ((v += term_laplacian(term, s, w, index++)), ...); }, terms_);
+      return v;
+    }
+  }
+  Scalar laplacian_sum(const StateType& s) const {
+    Workspace w = make_workspace();
+    return laplacian_sum(s, w);
+  }
+
  private:
+  // ---- the Laplacian of the potential (laplacian_sum) -----------------------------------------
+  template <class Term>
+  static constexpr bool pair_has_second_derivative =
+      requires(const Term& t, const Chart& c, Scalar d) {
+        { t.second_derivative(c, d, d, d) } -> std::convertible_to<Scalar>;
+      };
+  template <class Term>
+  Scalar term_laplacian(const Term& term, const StateType& s, Workspace& w, int index) const {
+    if (inactive(term)) return Scalar(0);
+    if constexpr (ChartTerm<Term, Chart>) {
+      static_cast<void>(index);
+      if constexpr (requires(const Point& q) {
+                      { term.laplacian(chart_, q, Scalar(1)) } -> std::convertible_to<Scalar>;
+                    }) {
+        SESI_CHECK(!s.framed() && !s.clustered, "chart-coordinate terms need the bodies in the chart itself");
+        w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
+        for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+          sc.q = s.q.col(b);
+          w.rows[static_cast<std::size_t>(b)] = term.laplacian(chart_, sc.q, mass(b));
+        });
+        return parallel::sum_in_order(w.rows);
+      } else {
+        return std::numeric_limits<Scalar>::quiet_NaN();
+      }
+    } else if constexpr (PairTerm<Term, Chart>) {
+      static_cast<void>(s);
+      if constexpr (!pair_has_second_derivative<Term> ||
+                    !(HasPairGeometry<Chart> || requires { chart_.curvature(); })) {
+        static_cast<void>(index);
+        return std::numeric_limits<Scalar>::quiet_NaN();
+      } else {
+        // Each body sums Delta_i W(d_ij) over all its partners j (both ends of a pair count).
+        const NeighbourLists* lists = by_rows() ? lists_of(term, w, index) : nullptr;
+        const Scalar reach2 = reach2_of(term);
+        w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
+        for_bodies(w, [&](int i, typename Workspace::Scratch& sc) {
+          sc.x = w.X.col(i);
+          Scalar row(0);
+          for_partners(lists, i, /*upper=*/false, [&](int j) { row += pair_laplacian(term, sc, w, i, j, reach2); });
+          w.rows[static_cast<std::size_t>(i)] = row;
+        });
+        return parallel::sum_in_order(w.rows);
+      }
+    } else {
+      static_cast<void>(s);
+      static_cast<void>(index);
+      if constexpr (requires(const typename Chart::Ambient& x) {
+                      { term.laplacian(chart_, x, Scalar(1)) } -> std::convertible_to<Scalar>;
+                    }) {
+        // As term_energy: in a cluster frame the term's centre moves into it, or a term without
+        // one sees world points C x (the Laplacian is invariant under the isometry C).
+        w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
+        if (w.clustered) {
+          if constexpr (has_movable_center<Term>) {
+            const Term local = localized(term, w);
+            for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+              sc.x = w.X.col(b);
+              w.rows[static_cast<std::size_t>(b)] = local.laplacian(chart_, sc.x, mass(b));
+            });
+          } else {
+            for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+              sc.x.noalias() = w.cluster * w.X.col(b);
+              w.rows[static_cast<std::size_t>(b)] = term.laplacian(chart_, sc.x, mass(b));
+            });
+          }
+        } else {
+          for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
+            sc.x = w.X.col(b);
+            w.rows[static_cast<std::size_t>(b)] = term.laplacian(chart_, sc.x, mass(b));
+          });
+        }
+        return parallel::sum_in_order(w.rows);
+      } else {
+        return std::numeric_limits<Scalar>::quiet_NaN();
+      }
+    }
+  }
+  /// Delta_i W(d_ij), sc.x holding point i: W'' + (n - 1) ctn W' of the geodesic distance
+  /// (special::radial_laplacian), or its chord form (special::chord_laplacian).
+  template <class Term>
+  Scalar pair_laplacian(const Term& term, typename Workspace::Scratch& sc, const Workspace& w, int i, int j,
+                        Scalar reach2) const {
+    sc.y = w.X.col(j);
+    const Scalar mi = mass(i), mj = mass(j);
+    const int n = dim();
+    if constexpr (HasPairGeometry<Chart>) {
+      const PairGeometry<Scalar> g = chart_.pair_geometry(sc.x, sc.y);
+      if (g.chord2 >= reach2) return Scalar(0);  // (a NaN chord goes on, and stays NaN)
+      if constexpr (is_chord_term<Term>) {
+        const Scalar c = g.chord();
+        return special::chord_laplacian(chart_.curvature(), n, c, term.derivative(chart_, c, mi, mj),
+                                        term.second_derivative(chart_, c, mi, mj));
+      } else if constexpr (AlgebraicPairTerm<Term, Chart> &&
+                           requires { term.second_derivative(chart_, g, mi, mj); }) {
+        return special::radial_laplacian(n, g.sn, g.cs(), term.derivative(chart_, g, mi, mj),
+                                         term.second_derivative(chart_, g, mi, mj));
+      } else {
+        const Scalar d = chart_.distance_of(g);
+        return special::radial_laplacian(n, g.sn, g.cs(), term.derivative(chart_, d, mi, mj),
+                                         term.second_derivative(chart_, d, mi, mj));
+      }
+    } else {
+      static_cast<void>(reach2);
+      const Scalar kappa = chart_.curvature();
+      if constexpr (is_chord_term<Term>) {
+        const Scalar c = chord(sc);
+        return special::chord_laplacian(kappa, n, c, term.derivative(chart_, c, mi, mj),
+                                        term.second_derivative(chart_, c, mi, mj));
+      } else {
+        const Scalar d = chart_.distance(sc.x, sc.y);
+        return special::radial_laplacian(n, special::sn(kappa, d), special::cs(kappa, d),
+                                         term.derivative(chart_, d, mi, mj), term.second_derivative(chart_, d, mi, mj));
+      }
+    }
+  }
+
   /// Before the per-body gradients: the embedding points and their ambient gradients (terms on
   /// embedding points), w's trig caches holding the trig of s.q.
   void prepare_gradients(const StateType& s, Workspace& w) const {

@@ -1,24 +1,22 @@
 #pragma once
 /// @file thermostat.hpp
-/// Langevin dynamics in the BAOAB arrangement over the hierarchical splitting (issue #25;
-/// docs/thermostats.md).
+/// Thermostats as a stage of the one composition engine (issue #25; docs/thermostats.md):
+/// sesi::Thermostat<Chart> is the Stage of Composition<Table, Chart, kick_drift_kick, Stage>
+/// (stepper.hpp), one runtime type for four kinds, so that a program instantiates one
+/// thermostatted engine per chart. There is no second step loop: the engine places the hooks.
 ///
-/// dq = dH/dp dt, dp = -dH/dq dt - gamma p dt + noise, whose invariant measure is the canonical
-/// one, exp(-H / kT) dq dp. One step of length h (Leimkuhler and Matthews, "Rational
+/// langevin: dq = dH/dp dt, dp = -dH/dq dt - gamma p dt + noise, whose invariant measure is the
+/// canonical exp(-H / kT) dq dp, in the BAOAB arrangement (Leimkuhler and Matthews, "Rational
 /// construction of stochastic numerical methods for molecular sampling", AMRX 2013(1), 34-56):
 ///   B  potential half kick, p -= h/2 dV/dq;
 ///   A  the kinetic flows K_1 .. K_n, each exact, for h/2;
 ///   O  the exact Ornstein-Uhlenbeck flow of the momenta for h (below);
 ///   A  the kinetic flows K_n .. K_1 for h/2 (the adjoint order, so the step is symmetric);
 ///   B  potential half kick.
-/// B and the level flows are the very functions the composition engine (stepper.hpp) calls:
-/// System::kick_cached and the chart's level_flow, with the same trig caches; the step is the
-/// engine's kick-drift-kick Strang step with O inserted between the two halves of the top level's
-/// flow. With gamma = 0 no O runs and no number is drawn: the two half flows of the top level
-/// fuse into one, as in the engine, and the step equals Composition<coefficients::Strang, Chart,
-/// Splitting::kick_drift_kick> bit for bit (also its reuse of the last gradient: one force
-/// evaluation per step). It is that KDK form, not the seed's drift-kick-drift Sesi2, that BAOAB
-/// reduces to.
+/// The engine's kick-drift-kick Strang step with O (the per-body hook) between the two halves of
+/// the top level's flow. With gamma = 0 no O runs and no number is drawn: the two half flows of
+/// the top level fuse into one, and the step is the kick-drift-kick Strang step bit for bit
+/// (also its reuse of the last gradient: one force evaluation per step).
 ///
 /// O. On a hierarchical chart K = sum_i a_i(q_<i) p_i^2 / 2 with a_i = g^ii / m (a diagonal
 /// inverse metric), so given q the canonical momenta are independent normals, p_i ~ N(0, kT / a_i),
@@ -29,25 +27,45 @@
 /// chart needs nothing more, but its K_i must be quadratic in p_i (docs/concepts.md). Where a_i is
 /// infinite (a body exactly at a chart pole) the noise of that component is 0.
 ///
+/// brownian: the overdamped dynamics gamma m dq = F dt + sqrt(2 gamma m kT) dW as the BAOAB
+/// limit (Leimkuhler and Matthews 2013; Leimkuhler, Matthews and Stoltz, IMA J. Numer. Anal. 36
+/// (2016) 13-79): O with c = 0 (fresh momenta p_i = sqrt(kT / a_i) xi_i), and the engine's step
+/// h = sqrt(2 dt / gamma) for a time step dt. Why: on E^n one step is
+///   q' = q + h^2/(2m) F + (h/2) sqrt(kT/m) (xi_n + xi_{n-1}),
+/// a drift h^2/(2m) F = dt F / (m gamma), and a noise whose increments telescope to
+/// (h/2)^2 (kT/m) 4 = h^2 kT / m = 2 kT dt / (m gamma) per step: the overdamped law's variance
+/// 2 kT / (m gamma) per unit time. Second order in the invariant measure (the papers above); the
+/// momenta carry no dynamics, there is no conserved quantity (conserved_offset() is NaN).
+///
+/// nose_hoover: NHC(h/2) step NHC(h/2), the chain's half steps as the engine's outer hook, acting
+/// on all momenta through the total kinetic energy (sesi/thermostats/nose_hoover.hpp); csvr: the
+/// same place for Bussi's stochastic rescale (sesi/thermostats/csvr.hpp). Scaling every p by s is
+/// exact on a hierarchical chart (K quadratic in p) and moves no q.
+///
+/// Heat: every stage's kinetic-energy change, summed in body order (per-body values into a buffer,
+/// summed serially), so heat() is bit-identical for any thread count.
+///
 /// Order: weak order 2; the configurational averages have an O(h^2) bias in the invariant measure
-/// (Leimkuhler and Matthews 2013; for a harmonic well with one exact A flow BAOAB samples the
-/// configuration exactly). Here A is the hierarchical sweep, exact only to O(h^2) per half step,
-/// so expect an O(h^2) configurational bias of the size of the NVE step's energy error.
+/// (Leimkuhler and Matthews 2013). Here A is the hierarchical sweep, exact only to O(h^2) per
+/// half step, so expect an O(h^2) configurational bias of the size of the NVE step's error.
 ///
 /// Noise: random.hpp, keyed by (seed, random::stream::langevin, step, body, component), where
-/// step is the stepper's own step counter (step(), set_step(): a resumed run sets it, and nothing
-/// else random is kept). Bit-identical for any thread count.
+/// step is the thermostat's own step counter (step(), set_step(): a resumed run sets it, and
+/// load() restores it). Bit-identical for any thread count.
 ///
 /// Frames: O acts on chart momenta only and the kinetic energy has the same form in every body
 /// frame (frames are isometries), so per-body frames and the cluster frame are handled as in the
-/// engine (the kicks see world points); Recharting<LangevinBAOAB<Chart>> re-charts after each
-/// step (recharting.hpp). A turn (p -> -p) leaves the canonical measure invariant.
+/// engine; Recharting<Composition<..., Thermostat<Chart>>> re-charts after each step
+/// (recharting.hpp). A turn (p -> -p) leaves the canonical measure invariant.
 ///
 /// Requires Random123 (random.hpp).
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "sesi/chart.hpp"
@@ -56,124 +74,225 @@
 #include "sesi/state.hpp"
 #include "sesi/stepper.hpp"
 #include "sesi/system.hpp"
+#include "sesi/thermostats/csvr.hpp"
+#include "sesi/thermostats/nose_hoover.hpp"
 
 namespace sesi {
 
-/// Langevin dynamics at temperature kT (energy units) with friction gamma (1/time), BAOAB.
-/// Models odeint's Stepper concept like the compositions (order() is the weak order, 2).
+enum class ThermostatKind { langevin, nose_hoover, csvr, brownian };
+
+/// A thermostat's settings (docs/thermostats.md).
+template <class Scalar>
+struct ThermostatParams {
+  ThermostatKind kind = ThermostatKind::langevin;
+  Scalar kT = 0;           ///< temperature in energy units (k_B = 1), >= 0
+  Scalar gamma = 0;        ///< langevin, brownian: friction (1/time); langevin gamma = 0 is NVE bit for bit
+  Scalar tau = 0;          ///< nose_hoover, csvr: relaxation time (> 0)
+  int chain = 3;           ///< nose_hoover: chain length M >= 1
+  std::uint64_t seed = 0;  ///< langevin, csvr, brownian: the noise's key
+};
+
+/// A thermostat as a stage of the composition engine (stepper.hpp): one runtime type for every kind.
 template <HierarchicalChart Chart>
-class LangevinBAOAB {
+class Thermostat {
  public:
   using Scalar = typename Chart::Scalar;
-  using state_type = State<Chart>;
-  using deriv_type = State<Chart>;
-  using value_type = Scalar;
-  using time_type = Scalar;
-  using order_type = unsigned short;
-  static constexpr order_type order_value = 2;
+
+  explicit Thermostat(ThermostatParams<Scalar> params) : params_(params) {
+    check_temperature(params.kT);
+    switch (params.kind) {
+      case ThermostatKind::langevin:
+        SESI_CHECK(params.gamma >= Scalar(0), "Langevin: the friction must be >= 0");
+        break;
+      case ThermostatKind::brownian:
+        SESI_CHECK(params.gamma > Scalar(0), "Brownian dynamics: the friction must be > 0");
+        break;
+      case ThermostatKind::nose_hoover:
+        SESI_CHECK(params.tau > Scalar(0), "Nose-Hoover: the relaxation time tau must be > 0");
+        SESI_CHECK(params.chain >= 1, "Nose-Hoover: the chain length must be >= 1");
+        chain_.emplace(params.chain, params.tau);
+        break;
+      case ThermostatKind::csvr:
+        SESI_CHECK(params.tau > Scalar(0), "CSVR: the relaxation time tau must be > 0");
+        break;
+    }
+  }
+
+  const ThermostatParams<Scalar>& params() const { return params_; }
+  ThermostatKind kind() const { return params_.kind; }
+  /// A new temperature from the next step on (a schedule).
+  void set_temperature(Scalar kT) {
+    check_temperature(kT);
+    params_.kT = kT;
+  }
+  /// The noise's step key: steps done since the start (incremented by every step).
+  std::uint64_t step() const { return step_; }
+  void set_step(std::uint64_t k) { step_ = k; }
+  /// Energy the thermostat's stages put into the system so far.
+  Scalar heat() const { return heat_; }
+  /// H + conserved_offset() is conserved up to the integrator's error (api: nose_hoover the chain's
+  /// extended energy; langevin, csvr -heat(), Bussi's effective energy; brownian NaN).
+  Scalar conserved_offset() const {
+    switch (params_.kind) {
+      case ThermostatKind::nose_hoover:
+        return chain_->extended_energy(nf_, params_.kT);
+      case ThermostatKind::brownian:
+        return std::numeric_limits<Scalar>::quiet_NaN();
+      default:
+        return -heat_;
+    }
+  }
+
+  /// Everything besides the params that a checkpoint must hold to resume bit for bit, as exact
+  /// doubles: {step, heat, kT (set_temperature's), N_f, the chain's state...}.
+  std::vector<double> save() const {
+    std::vector<double> out{static_cast<double>(step_), static_cast<double>(heat_), static_cast<double>(params_.kT),
+                            static_cast<double>(nf_)};
+    if (chain_) {
+      for (const auto v : chain_->save()) out.push_back(static_cast<double>(v));
+    }
+    return out;
+  }
+  void load(const std::vector<double>& saved) {
+    SESI_CHECK(saved.size() >= 4, "thermostat: a saved state holds at least step, heat, kT and N_f");
+    SESI_CHECK(saved[0] >= 0 && saved[0] == std::floor(saved[0]), "thermostat: the saved step must be a count");
+    step_ = static_cast<std::uint64_t>(saved[0]);
+    heat_ = static_cast<Scalar>(saved[1]);
+    set_temperature(static_cast<Scalar>(saved[2]));
+    nf_ = static_cast<Scalar>(saved[3]);
+    if (chain_) {
+      using Saved = std::remove_cvref_t<decltype(chain_->save())>;
+      Saved rest;
+      for (std::size_t i = 4; i < saved.size(); ++i) rest.push_back(static_cast<typename Saved::value_type>(saved[i]));
+      chain_->load(rest);
+    }
+  }
+
+  // ---- the engine's hooks (stepper.hpp) ----
+
+  /// The engine's step h for a time step dt: dt, or for Brownian dynamics sqrt(2 dt / gamma) (the
+  /// mapping in the file's comment).
+  Scalar time_step(Scalar dt) const {
+    using std::sqrt;
+    return params_.kind == ThermostatKind::brownian ? sqrt(Scalar(2) * dt / params_.gamma) : dt;
+  }
+  bool acts_on_total() const {
+    return params_.kind == ThermostatKind::nose_hoover || params_.kind == ThermostatKind::csvr;
+  }
+  bool acts_on_bodies() const {
+    return params_.kind == ThermostatKind::brownian ||
+           (params_.kind == ThermostatKind::langevin && params_.gamma != Scalar(0));
+  }
+
+  /// The outer hook for time h (which = 0 at the step's start, 1 at its end): the total kinetic
+  /// energy K (per body into a buffer, summed in body order), the kind's factor s, p <- s p.
+  template <class Sys, class Workspace>
+  void total(const Sys& sys, State<Chart>& x, Workspace& ws, Scalar h, int which) {
+    const int n = sys.bodies();
+    nf_ = static_cast<Scalar>(n) * static_cast<Scalar>(sys.dim());
+    buffer_.resize(static_cast<std::size_t>(n));
+    sys.for_bodies(ws, [&](int b, auto& sc) {
+      sc.q = x.q.col(b);
+      sc.p = x.p.col(b);
+      buffer_[static_cast<std::size_t>(b)] = sesi::kinetic_energy(sys.chart(), sc.q, sc.p, sys.mass(b));
+    });
+    Scalar K(0);
+    for (const Scalar k : buffer_) K += k;
+    Scalar s(1);
+    if (params_.kind == ThermostatKind::nose_hoover) {
+      s = chain_->advance(K, nf_, params_.kT, h);
+    } else {
+      s = thermostats::csvr_factor<Scalar>(K, nf_, params_.kT, h, params_.tau, params_.seed, step_,
+                                           static_cast<std::uint64_t>(which));
+    }
+    x.p *= s;
+    heat_ += (s * s - Scalar(1)) * K;  // K -> s^2 K (K quadratic in p)
+  }
+
+  /// The per-body hook: prepare O for a step h on n bodies.
+  void begin_bodies(int n, Scalar h) {
+    using std::exp;
+    using std::expm1;
+    if (params_.kind == ThermostatKind::brownian) {
+      c_ = Scalar(0);  // the overdamped limit: fresh momenta
+      var_ = params_.kT;
+    } else {
+      c_ = exp(-params_.gamma * h);
+      var_ = -expm1(Scalar(-2) * params_.gamma * h) * params_.kT;  // (1 - c^2) kT
+    }
+    buffer_.resize(static_cast<std::size_t>(n));
+  }
+  /// O on body b: p_i <- c p_i + sqrt(var / a_i) xi_i, a_i = dK_i/dp_i at p_i = 1 (= g^ii / m);
+  /// its kinetic-energy change sum_i a_i (p_i'^2 - p_i^2) / 2 into the buffer. One Philox call
+  /// per two components; writes only body b's data (threads).
+  template <class Q, class P>
+  void body(const Chart& chart, int b, Scalar m, const Q& q, P& p) {
+    using std::sqrt;
+    const int n = static_cast<int>(p.size());
+    Scalar dk(0);
+    for (int i = 0; i < n; i += 2) {
+      const auto z = random::normal_pair(params_.seed, random::stream::langevin, step_, static_cast<std::uint64_t>(b),
+                                         static_cast<std::uint64_t>(i / 2));
+      for (int j = i; j < n && j < i + 2; ++j) {
+        const Scalar a = chart.kinetic_dp(j, q, Scalar(1), m);
+        const Scalar old = p[j];
+        p[j] = c_ * p[j] + sqrt(var_ / a) * static_cast<Scalar>(z[static_cast<std::size_t>(j - i)]);
+        const Scalar d = p[j] * p[j] - old * old;
+        if (d != Scalar(0)) dk += a * d / Scalar(2);
+      }
+    }
+    buffer_[static_cast<std::size_t>(b)] = dk;
+  }
+  /// After the pass: the heat of O, summed in body order.
+  void end_bodies() {
+    Scalar sum(0);
+    for (const Scalar d : buffer_) sum += d;
+    heat_ += sum;
+  }
+  void end_step() { ++step_; }
+
+ private:
+  static void check_temperature([[maybe_unused]] Scalar kT) {
+    SESI_CHECK(kT >= Scalar(0), "thermostat: the temperature must be >= 0");
+  }
+
+  ThermostatParams<Scalar> params_;
+  std::uint64_t step_ = 0;
+  Scalar heat_ = 0;
+  Scalar nf_ = 0;  // N_f = bodies x dim, from the last outer hook (for the chain's extended energy)
+  Scalar c_ = 1, var_ = 0;  // this step's O: c = exp(-gamma h), var = (1 - c^2) kT
+  std::vector<Scalar> buffer_;  // per-body kinetic energies or heats, summed in body order
+  std::optional<thermostats::NoseHooverChain<Scalar>> chain_;
+};
+
+/// The thermostatted engine: the kick-drift-kick Strang step with the thermostat's stages.
+template <HierarchicalChart Chart>
+using Thermostatted = Composition<coefficients::Strang, Chart, Splitting::kick_drift_kick, Thermostat<Chart>>;
+
+/// Langevin dynamics at temperature kT (energy units) with friction gamma (1/time), BAOAB: a
+/// Thermostatted<Chart> with a langevin Thermostat. order() is the weak order, 2.
+template <HierarchicalChart Chart>
+class LangevinBAOAB : public Thermostatted<Chart> {
+  using Base = Thermostatted<Chart>;
+
+ public:
+  using Scalar = typename Chart::Scalar;
 
   /// kT >= 0, gamma >= 0; seed: the noise's key; first_step: the step counter's start (a
   /// resumed run passes the number of steps done).
   LangevinBAOAB(Scalar kT, Scalar gamma, std::uint64_t seed, std::uint64_t first_step = 0)
-      : kT_(kT), gamma_(gamma), seed_(seed), step_(first_step) {
-    SESI_CHECK(kT >= Scalar(0), "Langevin: the temperature must be >= 0");
-    SESI_CHECK(gamma >= Scalar(0), "Langevin: the friction must be >= 0");
+      : Base(Thermostat<Chart>(ThermostatParams<Scalar>{ThermostatKind::langevin, kT, gamma, Scalar(0), 3, seed})) {
+    this->stage().set_step(first_step);
   }
 
-  order_type order() const { return order_value; }
-  Scalar temperature() const { return kT_; }
-  Scalar friction() const { return gamma_; }
-  std::uint64_t seed() const { return seed_; }
+  Scalar temperature() const { return this->stage().params().kT; }
+  Scalar friction() const { return this->stage().params().gamma; }
+  std::uint64_t seed() const { return this->stage().params().seed; }
   /// The step counter: the key of the next step's noise (incremented by every do_step).
-  std::uint64_t step() const { return step_; }
-  void set_step(std::uint64_t k) { step_ = k; }
+  std::uint64_t step() const { return this->stage().step(); }
+  void set_step(std::uint64_t k) { this->stage().set_step(k); }
   /// A new temperature from the next step on (a schedule).
-  void set_temperature(Scalar kT) {
-    SESI_CHECK(kT >= Scalar(0), "Langevin: the temperature must be >= 0");
-    kT_ = kT;
-  }
-
-  /// Advance x from t to t + dt in place: one BAOAB step.
-  template <class Sys>
-  void do_step(Sys&& system, state_type& x, time_type /*t*/, time_type dt) {
-    using Raw = std::remove_cvref_t<Sys>;
-    const auto& sys = detail::unwrap<Raw>::get(system);
-    // As Composition::do_step: the trig caches left by the last step are valid if q is unchanged.
-    const bool q_unchanged =
-        last_q_.cols() == x.q.cols() && last_q_.rows() == x.q.rows() && last_q_ == x.q;
-    if (!q_unchanged) sys.refresh(x, ws_);
-    const bool reuse = kept_.valid(sys, x, q_unchanged);
-    const Scalar half = dt / Scalar(2);
-    // B: the first half kick is at the point of the last step's last kick (O moves no q).
-    if (reuse) {
-      x.p.noalias() -= half * kept_.gradient();
-    } else {
-      sys.kick_cached(x, half, ws_, kept_.gradient());
-    }
-    // A O A, body by body (each body's flows and noise touch only its own data).
-    const int top = sys.dim() - 1;
-    const bool thermal = gamma_ != Scalar(0);
-    using std::exp;
-    using std::expm1;
-    const Scalar c = thermal ? exp(-gamma_ * dt) : Scalar(1);
-    const Scalar var = thermal ? -expm1(Scalar(-2) * gamma_ * dt) * kT_ : Scalar(0);  // (1 - c^2) kT
-    sys.for_bodies(ws_, [&](int b, auto& sc) {
-      const Scalar m = sys.mass(b);
-      sc.q = x.q.col(b);
-      sc.p = x.p.col(b);
-      if (!thermal) {  // the engine's kinetic part: K_1(h/2)..K_{n-1}(h/2) K_n(h) K_{n-1}(h/2)..K_1(h/2)
-        for (int i = 0; i < top; ++i) flow(sys.chart(), b, i, m, half, sc);
-        flow(sys.chart(), b, top, m, dt, sc);
-        for (int i = top - 1; i >= 0; --i) flow(sys.chart(), b, i, m, half, sc);
-      } else {
-        for (int i = 0; i <= top; ++i) flow(sys.chart(), b, i, m, half, sc);
-        ornstein_uhlenbeck(sys.chart(), b, m, c, var, sc);
-        for (int i = top; i >= 0; --i) flow(sys.chart(), b, i, m, half, sc);
-      }
-      x.q.col(b) = sc.q;
-      x.p.col(b) = sc.p;
-    });
-    // B.
-    sys.kick_cached(x, half, ws_, kept_.gradient());
-    kept_.keep(sys, x);
-    last_q_ = x.q;
-    ++step_;
-  }
-
-  /// Forget the trig caches and the last gradient (as Composition::reset); the step counter stays.
-  void reset() {
-    last_q_.resize(0, 0);
-    kept_.forget();
-  }
-
- private:
-  /// The exact flow of level i for time h on body b: the chart's level_flow, as the engine calls it.
-  template <class Scratch>
-  void flow(const Chart& chart, int b, int i, Scalar m, Scalar h, Scratch& sc) {
-    detail::cached_level_flow(chart, ws_, b, i, m, h, sc);
-  }
-  /// O on body b: p_i <- c p_i + sqrt(var / a_i) xi_i, a_i = dK_i/dp_i at p_i = 1 (= g^ii / m).
-  template <class Scratch>
-  void ornstein_uhlenbeck(const Chart& chart, int b, Scalar m, Scalar c, Scalar var, Scratch& sc) const {
-    using std::sqrt;
-    const int n = static_cast<int>(sc.p.size());
-    for (int i = 0; i < n; i += 2) {
-      const auto z = random::normal_pair(seed_, random::stream::langevin, step_,
-                                         static_cast<std::uint64_t>(b), static_cast<std::uint64_t>(i / 2));
-      for (int j = i; j < n && j < i + 2; ++j) {
-        const Scalar a = chart.kinetic_dp(j, sc.q, Scalar(1), m);
-        sc.p[j] = c * sc.p[j] + sqrt(var / a) * static_cast<Scalar>(z[static_cast<std::size_t>(j - i)]);
-      }
-    }
-  }
-
-  Scalar kT_;
-  Scalar gamma_;
-  std::uint64_t seed_;
-  std::uint64_t step_;
-  Workspace<Chart> ws_;
-  typename state_type::Matrix last_q_;  // q after the last step: its trig is in ws_
-  detail::KeptGradient<Chart> kept_;    // dV/dq at last_q_ (the last kick's), reused by the next
+  void set_temperature(Scalar kT) { this->stage().set_temperature(kT); }
 };
 
 }  // namespace sesi

@@ -21,8 +21,12 @@ from ._sesi import InputError
 from ._sesi import methods as _methods
 from ._sesi import paper_exact as _paper_exact
 from ._sesi import potentials as _potentials
+from ._sesi import thermostat_keys as _thermostat_keys
+from ._sesi import thermostat_kinds as _thermostat_kinds
+from . import analysis  # g(r), MSD, VACF as NumPy arrays (docs/observables.md)
 
-__all__ = ["Simulation", "InputError", "InstabilityError", "methods", "potentials", "paper_exact"]
+__all__ = ["Simulation", "Thermostat", "InputError", "InstabilityError", "methods", "potentials", "thermostats",
+           "paper_exact"]
 
 InputError.__doc__ = """Bad input: a scene key, a value, a setting. A ValueError whose message is the
 one line `sesi run` prints for the same mistake (with the key path, e.g. bodies[2].x)."""
@@ -61,6 +65,12 @@ def potentials():
     return _potentials()
 
 
+def thermostats():
+    """The thermostat kinds of the scene format's [thermostat] table (sesi.Thermostat): a list of dicts
+    with kind and keys (besides kind and temperature, which every kind takes)."""
+    return [{"kind": kind, "keys": [k for k in keys if k != "temperature"]} for kind, keys in _thermostat_kinds()]
+
+
 def paper_exact(t):
     """The exact embedding points of the seed scene's three bodies at the times t (a number or a
     sequence): an array of shape (len(t), 3, 3) (include/sesi/scenes/paper.hpp,
@@ -71,6 +81,62 @@ def paper_exact(t):
     return _paper_exact(times.tolist())
 
 
+class Thermostat:
+    """A thermostat: the keys of a scene file's [thermostat] table (docs/scene-format.md).
+
+        sim.thermostat = sesi.Thermostat("langevin", temperature=1.0, gamma=1.0, seed=3)
+        sim.thermostat = sesi.Thermostat("nose-hoover", temperature=[(0, 2.0), (50, 0.5)], tau=0.5)
+        sim.thermostat = None   # constant energy again
+
+    kind is "langevin" (gamma, seed), "nose-hoover" (tau, chain), "csvr" (tau, seed) or
+    "brownian" (gamma, seed); temperature is kT (k_B = 1) or a schedule of (t, kT) knots, linear
+    between them. Keys left out take the scene format's defaults (chain 3, seed 0). The values are
+    checked by the program's scene reader, with its messages, when the thermostat is set (a
+    Thermostat itself holds them as given). A thermostat runs with method "sesi2". The thermostat
+    a simulation reads back (sim.thermostat) has every key of its kind."""
+
+    def __init__(self, kind, temperature, gamma=None, tau=None, chain=None, seed=None):
+        self.kind = kind
+        self.temperature = temperature
+        self.gamma = gamma
+        self.tau = tau
+        self.chain = chain
+        self.seed = seed
+
+    def as_dict(self):
+        """The [thermostat] table's keys that are given, as a dict."""
+        keys = {"kind": self.kind, "temperature": self.temperature, "gamma": self.gamma, "tau": self.tau,
+                "chain": self.chain, "seed": self.seed}
+        return {k: v for k, v in keys.items() if v is not None}
+
+    def __eq__(self, other):
+        return isinstance(other, Thermostat) and self.as_dict() == other.as_dict()
+
+    def __repr__(self):
+        return "sesi.Thermostat(" + ", ".join(f"{k}={v!r}" for k, v in self.as_dict().items()) + ")"
+
+
+def _thermostat_table(value, where):
+    """A thermostat setting as the dict of a [thermostat] table (None stays None)."""
+    if value is None:
+        return None
+    if isinstance(value, Thermostat):
+        return value.as_dict()
+    if isinstance(value, dict):
+        return dict(value)
+    raise InputError(f"{where}: expected a sesi.Thermostat, a dict of the [thermostat] keys or None, "
+                     f"got {type(value).__name__}")
+
+
+def _thermostat_of(keys):
+    if keys is None:
+        return None
+    temperature = keys["temperature"]
+    if isinstance(temperature, list):
+        temperature = [tuple(knot) for knot in temperature]
+    return Thermostat(**{**keys, "temperature": temperature})
+
+
 class Simulation:
     """A scene (space, bodies, potentials, integrator settings) and its state.
 
@@ -78,7 +144,7 @@ class Simulation:
     (the keys of the scene format, docs/scene-format.md). The scene is read and checked as a
     whole, with the program's messages, when the simulation is first used (a state, energy(),
     integrate(), run()); bodies and potentials are fixed from then on, the integrator settings
-    (method, dt, energy_guard, threads, check_every) may change between runs.
+    (method, dt, energy_guard, threads, check_every) and the thermostat may change between runs.
     """
 
     def __init__(self, space="sphere", dim=2, radius=None, name=None):
@@ -199,6 +265,24 @@ class Simulation:
             self._core.set_threads(int(value))
         elif key == "check_every":
             self._core.set_check_every(int(value))
+
+    def _set_thermostat(self, value):
+        table = _thermostat_table(value, "thermostat")
+        if table is not None:
+            _thermostat_keys(table, self._source)  # checked now, with the scene reader's messages
+        if self._core is None:
+            if table is None:
+                self._doc.pop("thermostat", None)
+            else:
+                self._doc["thermostat"] = table
+            return
+        self._core.set_thermostat(table)
+
+    thermostat = property(lambda self: _thermostat_of(self._start().thermostat), _set_thermostat,
+                          doc="The thermostat (sesi.Thermostat, or None: constant energy). Set a Thermostat or a dict "
+                              "of the [thermostat] keys; it acts from the next step on, at the current state (and the "
+                              "energy guard then judges the new thermostat's conserved quantity from there). With a "
+                              "thermostat the method is sesi2 (the default then).")
 
     method = property(lambda self: self._start().method,
                       lambda self, value: self._setting("method", value),

@@ -171,10 +171,29 @@ Measured in_child(Measure&& measure) {
   return m;
 }
 
-Measured measure_sesi(const ScalingPoint& point, int threads, long warm, long steps) {
+/// The thermostats timed against the NVE sesi2 step (issue #25): each a row whose method is
+/// "sesi2+KIND", the scaling scene with a [thermostat] at the scene's own temperature (its
+/// velocities have unit deviation per component: kT = 1), so that the dynamics, and with it the
+/// neighbour lists' rebuilds, stay those of the NVE run.
+const char* const timed_thermostats[] = {"langevin", "nose-hoover"};
+
+ThermostatSpec thermostat_spec(const std::string& kind) {
+  ThermostatSpec spec;
+  spec.kind = kind;
+  spec.schedule = {{0.0, 1.0}};
+  spec.gamma = 1.0;  // langevin: friction 1 (LJ time units)
+  spec.tau = 0.5;    // nose-hoover: relaxation time 0.5, chain 3
+  spec.chain = 3;
+  spec.seed = 1;
+  return spec;
+}
+
+/// thermostat: "" (NVE) or a kind of timed_thermostats.
+Measured measure_sesi(const ScalingPoint& point, int threads, long warm, long steps, const std::string& thermostat = {}) {
   return in_child([&] {
     sesi::parallel::set_threads(threads);
-    const Scene scene = scaling_scene(point);
+    Scene scene = scaling_scene(point);
+    if (!thermostat.empty()) scene.thermostat = thermostat_spec(thermostat);
     Measured m;
     m.pairs = pairs_within(scene, point.potential == "lennard-jones" ? lj_cutoff : std::numeric_limits<double>::infinity());
     m.threads = sesi::parallel::threads();
@@ -247,6 +266,9 @@ void print_summary(const std::vector<Row>& rows) {
                  q.m.threads == r.m.threads && q.center_distance == 0) {
         std::printf("  far (%s R) / origin %.2f", format_distance(r.center_distance).c_str(),
                     r.m.seconds_per_step / q.m.seconds_per_step);
+      } else if (r.method.starts_with("sesi2+") && q.method == "sesi2" && q.space == r.space && q.dim == r.dim &&
+                 q.m.threads == r.m.threads && q.center_distance == 0) {
+        std::printf("  / NVE sesi2 %.3f", r.m.seconds_per_step / q.m.seconds_per_step);
       }
     }
     std::printf("\n");
@@ -304,6 +326,8 @@ int scaling_command(const BenchOptions& o) {
                "flat-periodic: a plain 3-D LJ cell-list loop, velocity Verlet, one thread\n",
                warm + 1, warm);
   std::fprintf(csv, "# pairs_per_step: pairs within the cutoff (all pairs for gravity) x force evaluations per step\n");
+  std::fprintf(csv, "# sesi2+langevin, sesi2+nose-hoover (with sesi2): the sesi2 step with a thermostat's stages (issue #25; "
+                    "kT = 1, the scene's; langevin gamma = 1; nose-hoover tau = 0.5, chain 3), timed like the NVE rows\n");
   if (rounds > 1) {
     std::fprintf(csv, "# seconds_per_step and peak_rss_mb: minimum over %d rounds, each round timing every point of an N "
                  "once in turn\n", rounds);
@@ -332,6 +356,7 @@ int scaling_command(const BenchOptions& o) {
       Row row;             ///< what is written; its time the fastest round's
       ScalingPoint scene;  ///< unused for the flat cell-list loop
       int threads;         ///< asked for (0: all cores)
+      std::string thermostat = {};  ///< "" (NVE) or a kind of timed_thermostats
     };
     std::vector<Point> points;
     for (const std::string& method : methods) {
@@ -347,6 +372,16 @@ int scaling_command(const BenchOptions& o) {
           points.push_back({{point.bodies, space_label(point.space), point.dim, point.potential, method,
                              Measured{}, stages, d},
                             point, static_cast<int>(t)});
+        }
+        // The thermostats against the NVE sesi2 step, timed in the same rounds (distance 0).
+        if (method == "sesi2") {
+          ScalingPoint origin = point;
+          origin.center_distance = 0;
+          for (const char* kind : timed_thermostats) {
+            points.push_back({{point.bodies, space_label(point.space), point.dim, point.potential,
+                               method + "+" + kind, Measured{}, stages, 0},
+                              origin, static_cast<int>(t), kind});
+          }
         }
         // The same bodies' count and density on flat E^3, through sesi (not for a geodesic
         // method, which runs on S^n and H^n only).
@@ -374,7 +409,7 @@ int scaling_command(const BenchOptions& o) {
           out.seconds_per_step = flat_cell_list_seconds_per_step(static_cast<int>(n), steps, out.pairs);
           return out;
         })
-                                                           : measure_sesi(p.scene, p.threads, warm, steps);
+                                                           : measure_sesi(p.scene, p.threads, warm, steps, p.thermostat);
         const double peak = round == 0 ? m.peak_rss_mb : std::min(p.row.m.peak_rss_mb, m.peak_rss_mb);
         if (round == 0 || m.seconds_per_step < p.row.m.seconds_per_step) p.row.m = m;
         p.row.m.peak_rss_mb = peak;

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "analyze_command.hpp"
 #include "bench_command.hpp"
 #include "errors.hpp"
 #include "method_list.hpp"
@@ -45,6 +46,9 @@ std::string run_footer() {
       "                 \"lennard-jones\" (epsilon, sigma, cutoff); singular terms also min_distance\n"
       "  [integrator]   method, tolerance (method auto), dt, t_end, output_every, energy_guard,\n"
       "                 threads, check_every, checkpoint_every, neighbour_skin, trajectory_format\n"
+      "  [thermostat]   kind = \"langevin\" (gamma, seed), \"nose-hoover\" (tau, chain), \"csvr\"\n"
+      "                 (tau, seed), \"brownian\" (gamma, seed); temperature = kT or a schedule\n"
+      "                 [[t0, kT0], [t1, kT1], ...]; runs with method sesi2 (its default then)\n"
       "  Without SCENE: the seed paper's three bodies on S^2 with sesi4, dt = 0.1, t_end = 800.\n"
       "\nOUTPUTS (in DIR, put in place when the run ends; docs/scene-format.md says what is kept):\n"
       "  trajectory.csv   t, then per body b: b<b>_q<i>, b<b>_p<i>, b<b>_x<i>\n"
@@ -81,7 +85,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "sesi 0.1.0");
   app.require_subcommand(1);
   app.footer("\nRun 'sesi run --help' for scenes, methods, outputs and exit statuses; 'sesi sweep --help'\n"
-             "for many variants of a scene at once, on all cores or MPI ranks (docs/sweeps.md).");
+             "for many variants of a scene at once, on all cores or MPI ranks (docs/sweeps.md); 'sesi analyze\n"
+             "--help' for g(r), MSD and VACF of a finished run (docs/observables.md).");
 
   RunOptions options;
   std::string method;
@@ -129,6 +134,17 @@ int main(int argc, char** argv) {
                        ->type_name("S");
   auto* format_opt =
       run->add_option("--trajectory-format", trajectory_format, "Trajectory format: csv or h5md.")->type_name("F");
+  double temperature = 0.0;
+  auto* temperature_opt =
+      run->add_option("--temperature", temperature,
+                      "The thermostat's temperature kT (k_B = 1), constant: replaces the scene's (a schedule too); "
+                      "needs a [thermostat] table.")
+          ->type_name("KT");
+  std::string seed;
+  auto* seed_opt = run->add_option("--seed", seed,
+                                   "The thermostat's noise seed, 0 to 2^63 - 1 (langevin, csvr, brownian); needs a "
+                                   "[thermostat] table.")
+                       ->type_name("N");
   run->add_flag("--quiet,-q", options.quiet, "No report on stdout and no progress bar.");
   bool list_methods = false, list_json = false;
   auto* list_opt = run->add_flag("--list-methods", list_methods,
@@ -156,6 +172,8 @@ int main(int argc, char** argv) {
   CLI::App* bench = add_bench_subcommand(app, bench_options);
   SweepOptions sweep_options;
   CLI::App* sweep = add_sweep_subcommand(app, sweep_options);
+  AnalyzeOptions analyze_options;
+  CLI::App* analyze = add_analyze_subcommand(app, analyze_options);
 
   try {
     app.parse(argc, argv);
@@ -177,6 +195,8 @@ int main(int argc, char** argv) {
   if (resume_threads_opt->count() > 0) resume_options.threads = resume_threads;
   if (format_opt->count() > 0) options.trajectory_format = trajectory_format;
   if (skin_opt->count() > 0) options.neighbour_skin = neighbour_skin;
+  if (temperature_opt->count() > 0) options.temperature = temperature;
+  if (seed_opt->count() > 0) options.seed = seed;
 
   if (run->parsed() && (list_methods || list_json)) {
     if (!list_methods) {
@@ -196,6 +216,7 @@ int main(int argc, char** argv) {
   try {
     if (bench->parsed()) return bench_command(bench_options);
     if (sweep->parsed()) return sweep_command(sweep_options);
+    if (analyze->parsed()) return analyze_command(analyze_options);
     if (resume->parsed()) return resume_command(resume_options);
     return run_command(options);
   } catch (const InputError& e) {

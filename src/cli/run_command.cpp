@@ -1,6 +1,10 @@
 #include "run_command.hpp"
 
+#include <algorithm>
+#include <charconv>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <optional>
 
@@ -72,6 +76,39 @@ void apply_overrides(Scene& scene, const RunOptions& options) {
     in.trajectory_format = parse_trajectory_format(*options.trajectory_format, option, "--trajectory-format");
   }
   const Origin file{scene.source, in.line};
+  // The thermostat: --temperature and --seed change the scene's [thermostat]; none is added (a
+  // thermostat and its friction or relaxation time are the user's choice, as in LAMMPS's fixes).
+  if (options.temperature || options.seed) {
+    const std::string_view flag = options.temperature ? "--temperature" : "--seed";
+    if (!scene.thermostat) {
+      throw InputError(option, flag,
+                       "the scene has no [thermostat] table; add one to choose the thermostat and its friction or "
+                       "relaxation time (e.g. kind = \"langevin\", temperature = 1.0, gamma = 1.0; "
+                       "docs/scene-format.md)");
+    }
+  }
+  if (options.temperature) {
+    check_temperature(*options.temperature, scene.thermostat->kind, option, "--temperature");
+    scene.thermostat->schedule = {{0.0, *options.temperature}};
+  }
+  if (options.seed) {
+    // Read here, not by the argument parser, which wraps integers past 2^64 around.
+    long long seed = -1;
+    const std::string& text = *options.seed;
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), seed);
+    if (error != std::errc() || end != text.data() + text.size()) {
+      throw InputError(option, "--seed", "expected an integer from 0 to 2^63 - 1 (the noise's key), got '" +
+                                             cut_input(text) + "'");
+    }
+    check_seed(seed, option, "--seed");
+    if (scene.thermostat->kind == "nose-hoover") {
+      throw InputError(option, "--seed", "a nose-hoover thermostat is deterministic: it has no noise to seed");
+    }
+    scene.thermostat->seed = static_cast<std::uint64_t>(seed);
+  }
+  const bool method_flag = options.method || options.tolerance;  // --tolerance means --method auto
+  check_thermostat_method(scene, method_flag ? option : file,
+                          options.method ? "--method" : options.tolerance ? "--tolerance" : "integrator.method");
   if (in.method == "auto") {
     if (!in.tolerance) {
       throw InputError(file, "integrator.tolerance",
@@ -103,6 +140,26 @@ std::string describe_space(const SpaceSpec& space) {
          std::to_string(space.dim);
 }
 
+/// "langevin, kT = 1, gamma = 0.5, seed 3" or "nose-hoover, kT from 2 (t = 0) to 0.5 (t = 10) in 3
+/// knots, tau = 1, chain 3".
+std::string describe_thermostat(const ThermostatSpec& th) {
+  std::string text = th.kind + ", kT ";
+  if (th.schedule.size() == 1) {
+    text += "= " + format_number(th.schedule.front().second);
+  } else {
+    text += "from " + format_number(th.schedule.front().second) + " (t = " + format_number(th.schedule.front().first) +
+            ") to " + format_number(th.schedule.back().second) + " (t = " + format_number(th.schedule.back().first) +
+            ") in " + std::to_string(th.schedule.size()) + " knots";
+  }
+  const auto keys = thermostat_keys(th.kind);
+  const auto takes = [&](std::string_view key) { return std::find(keys.begin(), keys.end(), key) != keys.end(); };
+  if (takes("gamma")) text += ", gamma = " + format_number(th.gamma);
+  if (takes("tau")) text += ", tau = " + format_number(th.tau);
+  if (takes("chain")) text += ", chain " + std::to_string(th.chain);
+  if (takes("seed")) text += ", seed " + std::to_string(th.seed);
+  return text;
+}
+
 void print_report(const Scene& scene, const Recorder& recorder, const RunOutcome& outcome, double wall,
                   const std::filesystem::path& dir) {
   const InvariantStats& inv = recorder.invariants();
@@ -113,8 +170,26 @@ void print_report(const Scene& scene, const Recorder& recorder, const RunOutcome
   if (const auto& a = scene.integrator.auto_choice) {
     std::printf("  method auto (tolerance %s): %s\n", format_number(a->tolerance).c_str(), a->reason.c_str());
   }
-  std::printf("  energy %.17g, max |error| %.3e (relative %.3e)\n", inv.energy_initial,
-              inv.max_abs_energy_error, inv.max_rel_energy_error);
+  if (const auto& th = scene.thermostat) std::printf("  thermostat %s\n", describe_thermostat(*th).c_str());
+  if (scene.thermostat) {
+    // A thermostat changes the energy on purpose: its error is that of the conserved quantity.
+    std::printf("  energy %.17g -> %.17g, heat from the thermostat %.6g\n", inv.energy_initial, inv.energy_final,
+                inv.heat);
+    if (inv.thermostat_rows > 0) {
+      std::printf("  mean kinetic temperature %.6g, configurational %.6g (over %ld rows)\n",
+                  inv.sum_kinetic_temperature / static_cast<double>(inv.thermostat_rows),
+                  inv.sum_grad_squared / inv.sum_laplacian, inv.thermostat_rows);
+    }
+    if (std::isfinite(inv.conserved_initial)) {
+      std::printf("  conserved quantity (energy + the thermostat's offset): max |drift| %.3e\n",
+                  inv.max_abs_conserved_drift);
+    } else {
+      std::printf("  conserved quantity: none (brownian dynamics)\n");
+    }
+  } else {
+    std::printf("  energy %.17g, max |error| %.3e (relative %.3e)\n", inv.energy_initial,
+                inv.max_abs_energy_error, inv.max_rel_energy_error);
+  }
   std::printf("  momentum map: max |drift| %.3e\n", inv.max_momentum_drift);
   const std::vector<double> exact = recorder.max_exact_error();
   for (std::size_t b = 0; b < exact.size(); ++b) {
@@ -167,8 +242,9 @@ int execute(const Scene& scene, StagingDir& staging, bool quiet, const Checkpoin
           ? "; resume from its checkpoint there with: sesi resume " + dir.string()
           : "; resume from its checkpoint (step " + std::to_string(checkpoint_step) + ") with: sesi resume " +
                 dir.string();
+  // (A thermostat changes the energy on purpose: its tolerance bounded the pilots' NVE error.)
   if (const auto& a = scene.integrator.auto_choice;
-      a && recorder->invariants().max_rel_energy_error > 10 * a->tolerance) {
+      a && !scene.thermostat && recorder->invariants().max_rel_energy_error > 10 * a->tolerance) {
     std::fprintf(stderr,
                  "sesi: warning: %s: method auto: the run's max relative energy error %s is more than 10x the "
                  "tolerance %s (its pilot runs of %s time units did not meet what the run met); choose a smaller "

@@ -23,6 +23,10 @@ struct RunOptions {
   std::optional<long> checkpoint_every;
   std::optional<double> neighbour_skin;
   std::optional<std::string> trajectory_format;
+  /// The thermostat's constant temperature kT (replaces the scene's, schedule too) and noise seed;
+  /// both need the scene's [thermostat] table.
+  std::optional<double> temperature;
+  std::optional<std::string> seed;  ///< as given: an integer from 0 to 2^63 - 1 (checked here)
   bool quiet = false;
 };
 

@@ -1,10 +1,12 @@
 #pragma once
 /// @file chart_integrator.hpp
 /// The Integrator of one compile-time chart: what each (space, dimension) instantiates: the
-/// system, one composition engine, and the diagnostics of the framed state.
+/// system, one composition engine (and one thermostatted engine, for a scene with a
+/// [thermostat]: thermostat_stepper.hpp), and the diagnostics of the framed state.
 
 #include <memory>
 #include <stdexcept>
+#include <vector>
 
 #include <sesi/diagnostics.hpp>
 #include <sesi/recharting.hpp>
@@ -16,6 +18,7 @@
 #include "integrator.hpp"
 #include "methods.hpp"
 #include "terms.hpp"
+#include "thermostat_stepper.hpp"
 
 namespace sesi::program {
 
@@ -46,7 +49,7 @@ class ChartIntegrator final : public Integrator {
   explicit ChartIntegrator(const Scene& scene)
       : sys_(make_system(scene, make_chart<Chart>(scene.space))),
         x_(initial_state<Chart>(scene)),
-        stepper_(make_stepper(scene.integrator.method, sys_)) {
+        stepper_(make_chart_stepper(scene)) {
     if constexpr (sesi::ClusterChart<Chart>) enter_cluster_frame(scene);
     // A body that starts near a singular set of the scene's chart is re-charted before the first
     // step, as after every step: else that step runs in the singular chart (on S^9 a body at
@@ -65,6 +68,36 @@ class ChartIntegrator final : public Integrator {
     stepper_->step(x_, t, h);
     shown_valid_ = false;
     if (dt_ == 0.0) dt_ = h;  // a processed method's step, when the scene has none
+  }
+
+  bool thermostatted() const override { return thermostat_ != nullptr; }
+  void set_temperature(double kT) override {
+    if (!thermostat_) return;
+    sesi::Thermostat<Chart>& t = thermostat_->thermostat();
+    // Nose-Hoover's extended energy depends on kT (N_f kT xi_1, the masses Q ~ kT): a schedule
+    // changes it between steps at a fixed state by a known jump, taken out of the conserved
+    // quantity, so that it stays constant up to the method's error while the schedule moves.
+    // (Langevin's and CSVR's offset is -heat, which no kT enters; the jump is then exactly 0.)
+    const double before = t.kind() == sesi::ThermostatKind::nose_hoover ? t.conserved_offset() : 0.0;
+    t.set_temperature(kT);
+    if (t.kind() == sesi::ThermostatKind::nose_hoover) schedule_jumps_ += t.conserved_offset() - before;
+  }
+  std::uint64_t thermostat_step() const override { return thermostat_ ? thermostat_->thermostat().step() : 0; }
+  void set_thermostat_step(std::uint64_t k) override {
+    if (thermostat_) thermostat_->thermostat().set_step(k);
+  }
+  double heat() const override { return thermostat_ ? thermostat_->thermostat().heat() : 0.0; }
+  double conserved_offset() const override {
+    return thermostat_ ? thermostat_->thermostat().conserved_offset() - schedule_jumps_ : 0.0;
+  }
+  double kinetic_temperature() override {
+    // N_f = N n: every chart momentum is a degree of freedom (no constraint removes one).
+    const double dof = static_cast<double>(sys_.bodies()) * static_cast<double>(sys_.dim());
+    return 2.0 * sys_.kinetic_energy(shown()) / dof;
+  }
+  std::array<double, 2> configurational_sums() override {
+    const auto sums = sesi::configurational_sums(sys_, shown());
+    return {static_cast<double>(sums[0]), static_cast<double>(sums[1])};
   }
 
   int first_non_finite_body() const override {
@@ -115,16 +148,16 @@ class ChartIntegrator final : public Integrator {
     sesi::State<Chart> moved;
     const bool rebase = stepper_->processed() && stepper_->entered_step() != 0.0 && stepper_->entered_step() != dt_;
     if (rebase) stepper_->reentered(x_, dt_, moved);
-    return framed(rebase ? moved : x_);
+    return with_thermostat(framed(rebase ? moved : x_));
   }
   void restore(const FramedState& state) override {
-    take(state);
+    take(state, true);
     // (The initial state, e.g. another method's before its first step, is the state itself.)
     if (stepper_->processed()) stepper_->assume_entered(dt_ == 0.0 || same_state(x_, initial_) ? 0.0 : dt_);
   }
-  FramedState shown_state() const override { return framed(shown()); }
+  FramedState shown_state() const override { return with_thermostat(framed(shown())); }
   void start_from(const FramedState& state) override {
-    take(state);
+    take(state, false);
     if (stepper_->processed()) {
       initial_ = x_;  // the state itself until the first step (restore and framed_state)
       stepper_->assume_entered(0.0);
@@ -145,6 +178,25 @@ class ChartIntegrator final : public Integrator {
   }
 
  private:
+  /// The stepper of scene's method, or the thermostatted one (thermostat_ then points to it).
+  std::unique_ptr<AnyStepper<SystemOf<Chart>>> make_chart_stepper(const Scene& scene) {
+    if (!scene.thermostat) return make_stepper(scene.integrator.method, sys_);
+    // The scene checks allow a thermostat with sesi2 only (the stage runs with Strang's table).
+    if (scene.integrator.method != "sesi2") {
+      throw std::logic_error("a thermostat with method '" + scene.integrator.method + "' (sesi2 only)");
+    }
+    auto stepper = std::make_unique<ThermostatStepper<SystemOf<Chart>>>(sys_, *scene.thermostat);
+    thermostat_ = stepper.get();
+    return stepper;
+  }
+  /// out with the thermostat's saved state (Thermostat::save) when one acts.
+  FramedState with_thermostat(FramedState out) const {
+    if (thermostat_) {
+      out.thermostat = thermostat_->thermostat().save();
+      out.thermostat.push_back(schedule_jumps_);  // last: the integrator's own (set_temperature)
+    }
+    return out;
+  }
   /// The state the outputs and diagnostics see: x_, or for a processed method the state its
   /// kernel's variables stand for (post-processed on a copy once per state, kept until the next
   /// step or restore).
@@ -166,8 +218,9 @@ class ChartIntegrator final : public Integrator {
     return out;
   }
   /// x_ <- state, a chart method's state of this scene's size (anything else is a caller's
-  /// mistake, never reinterpreted: std::logic_error).
-  void take(const FramedState& state) {
+  /// mistake, never reinterpreted: std::logic_error), and the thermostat's (strict: a
+  /// checkpoint's, which must fit; Thermostat::load checks).
+  void take(const FramedState& state, bool strict) {
     if (state.embedded) {
       throw std::logic_error("a chart method's integrator was given a geodesic method's state (x, v) to restore");
     }
@@ -186,6 +239,16 @@ class ChartIntegrator final : public Integrator {
     x_.frames.assign(state.frames.begin(), state.frames.end());
     x_.clustered = state.clustered;
     if (state.clustered) x_.cluster = state.cluster;
+    // A state without a thermostat's (an NVE run's) leaves this thermostat as it is: at its start.
+    // Another integrator's (start_from: Python's sim.thermostat or sim.method changed) goes on
+    // only if it is of the same shape (a chain's variables are not another kind's).
+    if (thermostat_ && !state.thermostat.empty() &&
+        (strict || state.thermostat.size() == thermostat_->thermostat().save().size() + 1)) {
+      std::vector<double> saved = state.thermostat;
+      schedule_jumps_ = saved.back();
+      saved.pop_back();
+      thermostat_->thermostat().load(saved);
+    }
     shown_valid_ = false;
   }
   static bool same_state(const sesi::State<Chart>& a, const sesi::State<Chart>& b) {
@@ -219,6 +282,8 @@ class ChartIntegrator final : public Integrator {
 
   SystemOf<Chart> sys_;
   sesi::State<Chart> x_;
+  ThermostatStepper<SystemOf<Chart>>* thermostat_ = nullptr;  // stepper_, if thermostatted
+  double schedule_jumps_ = 0.0;  // Nose-Hoover: the extended energy's jumps at kT changes (set_temperature)
   std::unique_ptr<AnyStepper<SystemOf<Chart>>> stepper_;  // refers to sys_
   typename SystemOf<Chart>::Workspace w_ = sys_.make_workspace();  // the diagnostics' own
   // Processed methods (AnyStepper::processed): the step of the kernel's variables in

@@ -2,8 +2,9 @@
 /// @file dispatch.hpp
 /// From the scene's runtime space and dimension to a compile-time chart, once per run:
 /// S^n, H^n and E^n with fixed-size Eigen types for n = 1..8 (max_fixed_dim), Eigen::Dynamic
-/// above. Each (space, dimension) instantiates one ChartIntegrator: one System type (terms.hpp)
-/// and one composition engine serving every method (methods.hpp); on S^n and H^n also one
+/// above. Each (space, dimension) instantiates one ChartIntegrator: one System type (terms.hpp),
+/// one composition engine serving every method (methods.hpp) and one thermostatted engine serving
+/// every thermostat kind (thermostat_stepper.hpp); on S^n and H^n also one
 /// EmbeddedIntegrator serving every geodesic method. The instantiations are spread over the
 /// dispatch_*.cpp files so that they compile in parallel.
 

@@ -94,6 +94,8 @@ class EmbeddedIntegrator final : public Integrator {
   explicit EmbeddedIntegrator(const Scene& scene)
       : sys_(make_system(scene, make_chart<Chart>(scene.space))),
         e_(sesi::reference::to_embedded(sys_, initial_state<Chart>(scene))) {
+    // The thermostats are stages of the chart engine: the scene checks refuse them here.
+    if (scene.thermostat) throw std::logic_error("a thermostat with geodesic method '" + scene.integrator.method + "'");
     geodesic_engine<Chart>(EmbeddedMethods{}, scene.integrator.method, stepper_, processed_);
     if (processed_) {
       dt_ = scene.integrator.dt.value_or(0.0);

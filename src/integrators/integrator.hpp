@@ -4,6 +4,9 @@
 /// (run_loop.cpp, compiled once) needs from the compile-time world. make_integrator dispatches
 /// the scene's runtime space and dimension to a compile-time chart (dispatch.cpp).
 
+#include <array>
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -26,6 +29,10 @@ struct FramedState {
   Eigen::MatrixXd cluster;              ///< the cluster frame (sesi::State::cluster), if clustered
   bool embedded = false;                ///< a geodesic method's state: x and v below
   Eigen::MatrixXd x, v;                 ///< ambient x bodies, if embedded
+  /// A thermostatted run's thermostat (sesi::Thermostat::save(): its step counter, heat, chain
+  /// variables; then the integrator's sum of Nose-Hoover's jumps at schedule changes), else
+  /// empty. Nothing random: the noise is keyed by the seed and the step.
+  std::vector<double> thermostat;
 };
 
 class Integrator {
@@ -69,6 +76,30 @@ class Integrator {
   /// With a non-finite energy: the first body (1-based) whose kinetic energy or potential
   /// gradient is not finite, or 0.
   virtual int body_with_non_finite_energy() = 0;
+
+  // A thermostatted run (Scene::thermostat; sesi::Thermostat, include/sesi/thermostat.hpp). The
+  // defaults are a constant-energy integrator's: no thermostat, nothing to set, no heat.
+
+  /// Whether a thermostat acts (only a chart method's integrator has one: the scene checks
+  /// refuse a thermostat with a geodesic method).
+  virtual bool thermostatted() const { return false; }
+  /// The thermostat's target kT from the next step on.
+  virtual void set_temperature(double kT) { static_cast<void>(kT); }
+  /// The noise's step key: the steps done since the run's start.
+  virtual std::uint64_t thermostat_step() const { return 0; }
+  virtual void set_thermostat_step(std::uint64_t k) { static_cast<void>(k); }
+  /// The energy the thermostat put into the system so far.
+  virtual double heat() const { return 0.0; }
+  /// energy() + conserved_offset() is conserved up to the method's error (sesi::Thermostat::
+  /// conserved_offset; NaN for brownian, which conserves nothing).
+  virtual double conserved_offset() const { return 0.0; }
+  /// 2 K / N_f with N_f = bodies x dim (k_B = 1).
+  virtual double kinetic_temperature() { return std::numeric_limits<double>::quiet_NaN(); }
+  /// {sum_b |grad_b V|^2, sum_b Laplace-Beltrami_b V} (sesi::configurational_sums): their ratio is
+  /// the configurational temperature (Rugh 1997); NaN where a term has no Laplacian.
+  virtual std::array<double, 2> configurational_sums() {
+    return {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+  }
 };
 
 /// The integrator of scene (its space, dimension, bodies, potentials and method), at the

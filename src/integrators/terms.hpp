@@ -11,6 +11,7 @@
 /// function per pair. The geodesic aggregate gets the geodesic distance d.
 
 #include <algorithm>
+#include <limits>
 #include <memory>
 #include <type_traits>
 #include <variant>
@@ -45,6 +46,11 @@ class PairSum {
   double derivative(const Space& space, double d, double mi, double mj) const {
     return sum(d, [&](const auto& t, auto arg) { return t.derivative(space, arg, mi, mj); });
   }
+  /// d^2W/dd^2, for the configurational temperature (sesi::System::laplacian_sum).
+  template <class Space>
+  double second_derivative(const Space& space, double d, double mi, double mj) const {
+    return sum(d, [&](const auto& t, auto arg) { return t.second_derivative(space, arg, mi, mj); });
+  }
   template <class Space>
     requires sesi::HasPairGeometry<Space>
   double value(const Space& space, const sesi::PairGeometry<double>& g, double mi, double mj) const {
@@ -54,6 +60,11 @@ class PairSum {
     requires sesi::HasPairGeometry<Space>
   double derivative(const Space& space, const sesi::PairGeometry<double>& g, double mi, double mj) const {
     return sum_on(space, g, [&](const auto& t, auto arg) { return t.derivative(space, arg, mi, mj); });
+  }
+  template <class Space>
+    requires sesi::HasPairGeometry<Space>
+  double second_derivative(const Space& space, const sesi::PairGeometry<double>& g, double mi, double mj) const {
+    return sum_on(space, g, [&](const auto& t, auto arg) { return t.second_derivative(space, arg, mi, mj); });
   }
   template <class Space>
     requires sesi::HasPairGeometry<Space>
@@ -185,6 +196,24 @@ class ExternalTerms {
     double v = 0.0;
     for (const Term& term : terms_) {
       v += std::visit([&](const auto& t) { return t.value(space, x, m); }, term);
+    }
+    return v;
+  }
+
+  /// The Laplacian of the sum (sesi::System::laplacian_sum): NaN when a term is given as code
+  /// (FunctionExternal has no Laplacian).
+  double laplacian(const Chart& space, const Ambient& x, double m) const {
+    double v = 0.0;
+    for (const Term& term : terms_) {
+      v += std::visit(
+          [&](const auto& t) {
+            if constexpr (requires { t.laplacian(space, x, m); }) {
+              return static_cast<double>(t.laplacian(space, x, m));
+            } else {
+              return std::numeric_limits<double>::quiet_NaN();
+            }
+          },
+          term);
     }
     return v;
   }

@@ -1,6 +1,7 @@
 #include "h5md_writer.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <initializer_list>
 #include <stdexcept>
@@ -100,6 +101,15 @@ std::vector<hsize_t> chunk_shape(const std::vector<hsize_t>& item) {
   return chunk;
 }
 
+/// A thermostatted run's observables under observables/ (the names of diagnostics.csv's columns).
+constexpr const char* thermostat_names[] = {"temperature", "kinetic_temperature", "configurational_temperature",
+                                            "heat", "conserved"};
+
+/// Their values in s, in thermostat_names' order.
+std::array<double, 5> thermostat_values(const Snapshot& s) {
+  return {s.temperature, s.kinetic_temperature, s.configurational_temperature(), s.heat, s.conserved};
+}
+
 /// A time series under construction: its dataset and the shape of one frame.
 struct Series {
   Handle dataset;
@@ -116,6 +126,8 @@ struct H5mdWriter::Impl {
   // Declared first, destroyed last: the file closes after its datasets.
   Handle file, group_properties, dataset_properties;
   Series step, time, position, chart_position, chart_momentum, energy;
+  /// A thermostatted run's observables (diagnostics.csv's columns), in thermostat_names' order.
+  std::vector<Series> thermostat;
 
   [[noreturn]] void fail(const std::string& what) const {
     const std::string detail = hdf5_message();
@@ -299,6 +311,11 @@ H5mdWriter::H5mdWriter(const std::filesystem::path& path, const Scene& scene) : 
   }
   const Handle observables = w.group(root, "observables");
   w.energy = element(observables.get(), "energy", "observables/energy", {});
+  if (scene.thermostat) {
+    for (const char* name : thermostat_names) {
+      w.thermostat.push_back(element(observables.get(), name, (std::string("observables/") + name).c_str(), {}));
+    }
+  }
 }
 
 H5mdWriter::~H5mdWriter() = default;
@@ -320,6 +337,10 @@ void H5mdWriter::write(const Snapshot& s) {
   w.append(w.chart_position, s.q.data());
   w.append(w.chart_momentum, s.p.data());
   w.append(w.energy, &s.energy);
+  if (!w.thermostat.empty()) {
+    const std::array<double, 5> values = thermostat_values(s);
+    for (std::size_t k = 0; k < w.thermostat.size(); ++k) w.append(w.thermostat[k], &values[k]);
+  }
   ++w.frames;
 }
 
@@ -362,6 +383,10 @@ void H5mdWriter::replay(const std::filesystem::path& from, unsigned long long fr
   read("particles/all/chart_position/value", H5T_NATIVE_DOUBLE, w.bodies * w.dim, &q);
   read("particles/all/chart_momentum/value", H5T_NATIVE_DOUBLE, w.bodies * w.dim, &p);
   read("observables/energy/value", H5T_NATIVE_DOUBLE, 1, &energy);
+  std::vector<std::vector<double>> thermostat(w.thermostat.size());
+  for (std::size_t k = 0; k < w.thermostat.size(); ++k) {
+    read((std::string("observables/") + thermostat_names[k] + "/value").c_str(), H5T_NATIVE_DOUBLE, 1, &thermostat[k]);
+  }
   const auto rows = static_cast<Eigen::Index>(w.bodies);
   Snapshot s;
   for (unsigned long long f = 0; f < frames; ++f) {
@@ -371,6 +396,15 @@ void H5mdWriter::replay(const std::filesystem::path& from, unsigned long long fr
     s.q = Eigen::Map<const Eigen::MatrixXd>(&q[f * w.bodies * w.dim], static_cast<Eigen::Index>(w.dim), rows);
     s.p = Eigen::Map<const Eigen::MatrixXd>(&p[f * w.bodies * w.dim], static_cast<Eigen::Index>(w.dim), rows);
     s.energy = energy[f];
+    if (!thermostat.empty()) {
+      // The configurational temperature was written as the ratio of the sums: {T, 1}.
+      s.thermostat = true;
+      s.temperature = thermostat[0][f];
+      s.kinetic_temperature = thermostat[1][f];
+      s.configurational = {thermostat[2][f], 1.0};
+      s.heat = thermostat[3][f];
+      s.conserved = thermostat[4][f];
+    }
     write(s);
   }
 }
@@ -379,6 +413,7 @@ void H5mdWriter::close() {
   Impl& w = *impl_;
   if (w.file.get() < 0) return;
   bool ok = true;
+  for (Series& s : w.thermostat) ok = s.dataset.close() && ok;
   for (Series* s : {&w.energy, &w.chart_momentum, &w.chart_position, &w.position, &w.time, &w.step}) {
     ok = s->dataset.close() && ok;
   }

@@ -10,6 +10,8 @@
 ///   particles/all/chart_momentum  value [frames][N][dim]: momenta p (likewise)
 ///   particles/all/mass        [N]
 ///   observables/energy        value [frames] (likewise)
+///   observables/temperature, kinetic_temperature, configurational_temperature, heat, conserved
+///                             value [frames] (likewise): a thermostatted run's, as in diagnostics.csv
 ///   parameters                space, dim, radius (S^n, H^n) as attributes
 ///
 /// The numbers are the doubles of trajectory.csv, bit for bit. HDF5 failures throw

@@ -572,6 +572,46 @@ bool remove_superseded(const fs::path& dir) {
   return fs::remove(dir, ec);
 }
 
+void lock_output_dir(DirLock& lock, const fs::path& dir, const std::string& key) {
+  fs::path parent = dir.parent_path();
+  if (parent.empty()) parent = ".";
+  // As StagingDir: inside a mount point, else beside the directory.
+  if (is_mount_point(dir, parent)) {
+    lock.acquire(dir / (std::string(inside_prefix) + "lock"), key);
+  } else {
+    lock.acquire(parent / ("." + dir.filename().string() + ".sesi-lock"), key);
+  }
+}
+
+bool has_manifest(const fs::path& dir) { return read_manifest(dir).has_value(); }
+
+bool manifest_lists(const fs::path& dir, const std::string& name) {
+  const auto manifest = read_manifest(dir);
+  return manifest && std::find(manifest->begin(), manifest->end(), name) != manifest->end();
+}
+
+void add_to_manifest(const fs::path& dir, const std::vector<std::string>& names) {
+  std::ifstream in(dir / manifest_name);
+  std::string head;
+  std::getline(in, head);
+  std::vector<std::string> listed = read_manifest(dir).value_or(std::vector<std::string>{});
+  std::erase(listed, std::string(manifest_name));
+  listed.insert(listed.end(), names.begin(), names.end());
+  std::sort(listed.begin(), listed.end());
+  listed.erase(std::unique(listed.begin(), listed.end()), listed.end());
+  const fs::path temporary = dir / (std::string(manifest_name) + ".tmp");
+  std::ofstream out(temporary);
+  out << (head.starts_with(manifest_head) ? head : std::string(manifest_head)) << '\n';
+  for (const std::string& name : listed) out << name << '\n';
+  out.close();
+  std::error_code ec;
+  if (out) fs::rename(temporary, dir / manifest_name, ec);
+  if (!out || ec) {
+    fs::remove(temporary, ec);
+    throw std::runtime_error("cannot write " + (dir / manifest_name).string());
+  }
+}
+
 fs::path shown_path(const fs::path& path) {
   const std::lock_guard<std::mutex> guard(live_mutex);
   for (const auto& [staging, target] : live_staging) {

@@ -95,6 +95,17 @@ class StagingDir {
 /// nothing but sesi outputs; otherwise leave it. Returns whether it was removed.
 bool remove_superseded(const std::filesystem::path& dir);
 
+/// For a tool that adds files to a finished run's outputs (`sesi analyze`): take the lock that a
+/// run into `dir` takes (so no run replaces dir meanwhile), as DirLock::acquire does.
+void lock_output_dir(DirLock& lock, const std::filesystem::path& dir, const std::string& key);
+/// Whether dir's manifest (sesi-manifest.txt) lists `name` as a file sesi wrote there.
+bool manifest_lists(const std::filesystem::path& dir, const std::string& name);
+/// Whether dir has a manifest.
+bool has_manifest(const std::filesystem::path& dir);
+/// Add `names` to dir's manifest (replaced atomically), so that a run repeated into dir replaces
+/// them like its other outputs. Throws std::runtime_error on a write error.
+void add_to_manifest(const std::filesystem::path& dir, const std::vector<std::string>& names);
+
 /// `path` as the user should see it in a message: a path inside a live staging directory is
 /// shown inside its output directory (the --out the user gave), never the temporary name.
 std::filesystem::path shown_path(const std::filesystem::path& path);

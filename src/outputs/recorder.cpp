@@ -33,9 +33,15 @@ std::vector<std::string> trajectory_header(const Scene& scene) {
   return names;
 }
 
-std::vector<std::string> diagnostics_header(const std::vector<std::string>& momentum_names) {
+std::vector<std::string> diagnostics_header(const Scene& scene, const std::vector<std::string>& momentum_names) {
   std::vector<std::string> names{"t", "energy", "energy_error"};
   names.insert(names.end(), momentum_names.begin(), momentum_names.end());
+  if (scene.thermostat) {
+    for (const char* name :
+         {"temperature", "kinetic_temperature", "configurational_temperature", "heat", "conserved"}) {
+      names.emplace_back(name);
+    }
+  }
   return names;
 }
 
@@ -62,7 +68,9 @@ std::vector<std::string> momentum_names(int ambient_dim, bool translations) {
 }
 
 Recorder::Recorder(const Scene& scene, std::filesystem::path dir, std::vector<std::string> momentum_names)
-    : scene_(scene), dir_(std::move(dir)), diagnostics_(dir_ / "diagnostics.csv", diagnostics_header(momentum_names)) {
+    : scene_(scene),
+      dir_(std::move(dir)),
+      diagnostics_(dir_ / "diagnostics.csv", diagnostics_header(scene, momentum_names)) {
   if (scene.integrator.trajectory_format == TrajectoryFormat::h5md) {
 #ifdef SESI_HAVE_HDF5
     trajectory_h5md_ = std::make_unique<H5mdWriter>(dir_ / "trajectory.h5", scene);
@@ -169,6 +177,17 @@ void Recorder::track(double energy, const Eigen::VectorXd& momentum) {
   }
 }
 
+void Recorder::track_conserved(double conserved) {
+  if (!stats_.conserved_tracking) {
+    stats_.conserved_tracking = true;
+    stats_.conserved_initial = conserved;
+  }
+  stats_.conserved_final = conserved;
+  // (NaN for brownian, which conserves nothing: the drift stays NaN.)
+  const double drift = std::abs(conserved - stats_.conserved_initial);
+  stats_.max_abs_conserved_drift = std::isnan(drift) ? drift : std::max(stats_.max_abs_conserved_drift, drift);
+}
+
 void Recorder::write_row(const Snapshot& s) {
   if (scene_.space.kind == SpaceKind::hyperbolic) {
     // The distance from the chart's origin: R acosh(x_time / R), time-like coordinate last.
@@ -192,6 +211,18 @@ void Recorder::write_row(const Snapshot& s) {
 #endif
   row_.assign({s.t, s.energy, s.energy - stats_.energy_initial});
   row_.insert(row_.end(), s.momentum.data(), s.momentum.data() + s.momentum.size());
+  if (scene_.thermostat) {
+    row_.insert(row_.end(),
+                {s.temperature, s.kinetic_temperature, s.configurational_temperature(), s.heat, s.conserved});
+    ++stats_.thermostat_rows;
+    stats_.sum_kinetic_temperature += s.kinetic_temperature;
+    // (A row without them, NaN: a failed run's last, or a potential with no Laplacian.)
+    if (!std::isnan(s.configurational[1])) {
+      stats_.sum_grad_squared += s.configurational[0];
+      stats_.sum_laplacian += s.configurational[1];
+    }
+    stats_.heat = s.heat;
+  }
   diagnostics_.row(row_);
   if (exact_) exact_->row(s);
   ++frames_;

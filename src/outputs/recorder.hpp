@@ -3,7 +3,9 @@
 /// The outputs of a run, written into the (staging) output directory:
 ///   trajectory.csv  t, then per body b: chart q, momenta p, embedding x (trajectory_format csv)
 ///   trajectory.h5   the same numbers as H5MD 1.1 (trajectory_format h5md; h5md_writer.hpp)
-///   diagnostics.csv t, energy, energy error, momentum-map components
+///   diagnostics.csv t, energy, energy error, momentum-map components; with a thermostat also
+///                   temperature (the target), kinetic_temperature, configurational_temperature,
+///                   heat, conserved (E + the thermostat's conserved offset)
 ///   exact.csv       t, then per body the exact embedding point (scenes with an exact solution)
 ///   summary.json    method, step, energy and momentum-map statistics, final state, ...
 /// Rows are written every output_every steps (and at the first and last step); the energy and
@@ -48,6 +50,7 @@ class Recorder final : public RunSink {
 
   /// Every checked step, from the initial state on: conserved quantities for the summary's maxima.
   void track(double energy, const Eigen::VectorXd& momentum) override;
+  void track_conserved(double conserved) override;
   /// One output row (trajectory, diagnostics, exact).
   void write_row(const Snapshot& s) override;
   /// The last finite state of the run, with velocities (for the summary's final state).

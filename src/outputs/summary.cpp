@@ -1,6 +1,7 @@
 #include "summary.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <variant>
@@ -104,6 +105,48 @@ void write_auto(JsonWriter& json, const AutoChoice& a, double max_rel_error) {
   json.end_array();
   json.end_object();
 }
+
+/// The thermostat's settings (P1, src/scene: the [thermostat] table as read, or as --temperature
+/// and --seed changed it): temperature a number when constant, else the [[t, kT], ...] knots.
+void write_thermostat_settings(JsonWriter& json, const ThermostatSpec& th) {
+  json.string("kind", th.kind);
+  if (th.schedule.size() == 1 && th.schedule.front().first == 0.0) {
+    json.number("temperature", th.schedule.front().second);
+  } else {
+    json.begin_array("temperature");
+    for (const auto& [t, kT] : th.schedule) json.numbers("", std::array{t, kT});
+    json.end_array();
+  }
+  const auto keys = thermostat_keys(th.kind);
+  const auto takes = [&](std::string_view key) { return std::find(keys.begin(), keys.end(), key) != keys.end(); };
+  if (takes("gamma")) json.number("gamma", th.gamma);
+  if (takes("tau")) json.number("tau", th.tau);
+  if (takes("chain")) json.integer("chain", th.chain);
+  if (takes("seed")) json.integer("seed", static_cast<long>(th.seed));
+}
+
+/// A thermostatted run: its settings (write_thermostat_settings), then what it did: the mean
+/// kinetic temperature over the rows, the configurational temperature as the ratio of the rows'
+/// sums (Rugh 1997: the estimator is <|grad V|^2> / <Laplacian V>, a ratio of averages, not an
+/// average of ratios), the heat the thermostat put in, and the conserved quantity over the
+/// checked steps, which the energy guard judges (brownian conserves nothing: its guard is off).
+void write_thermostat(JsonWriter& json, const ThermostatSpec& t, const InvariantStats& inv, const Snapshot& last) {
+  json.begin_object("thermostat");
+  write_thermostat_settings(json, t);
+  const bool brownian = t.kind == "brownian";
+  const double rows = static_cast<double>(inv.thermostat_rows);
+  json.number("mean_kinetic_temperature", inv.sum_kinetic_temperature / rows);
+  json.number("configurational_temperature", inv.sum_grad_squared / inv.sum_laplacian);
+  json.number("final_heat", last.heat);
+  json.begin_object("conserved");
+  json.number("initial", inv.conserved_initial);
+  json.number("final", inv.conserved_final);
+  json.number("max_abs_drift", inv.max_abs_conserved_drift);
+  json.end_object();
+  json.string("energy_guard", brownian ? "off: overdamped dynamics conserve nothing"
+                                       : "judges the conserved quantity, E + the thermostat's offset");
+  json.end_object();
+}
 }  // namespace
 
 std::string summary_json(const SummaryData& d) {
@@ -117,6 +160,12 @@ std::string summary_json(const SummaryData& d) {
   json.string("stop_reason", stop_reason_name(d.outcome.reason));
   write_space(json, scene);
   json.integer("bodies", scene.body_count());
+  {
+    // The masses, for what is computed from the trajectory (sesi analyze: velocities from q, p).
+    std::vector<double> masses;
+    for (const Body& b : scene.bodies) masses.push_back(b.mass);
+    json.numbers("masses", masses);
+  }
   json.begin_array("potentials");
   for (const PotentialSpec& p : scene.potentials) json.string("", potential_kind(p));
   json.end_array();
@@ -132,6 +181,7 @@ std::string summary_json(const SummaryData& d) {
   json.number("wall_seconds", d.wall_seconds);
   // --threads (0: all cores), or fewer for a scene too small to pay for them.
   json.integer("threads_used", threads_used(scene));
+  if (scene.thermostat) write_thermostat(json, *scene.thermostat, inv, d.final_state);
   if (const auto& a = scene.integrator.auto_choice) write_auto(json, *a, inv.max_rel_energy_error);
 
   json.begin_object("energy");

@@ -22,6 +22,14 @@ struct InvariantStats {
   /// H^n: the largest distance of a body from the scene chart's origin over the output rows,
   /// where the q, p columns (the scene's chart) are read (scene_chart_p_error).
   double max_distance = 0.0;
+  /// A thermostatted run: the conserved quantity E + conserved_offset() over the checked steps
+  /// (NaN for brownian), and sums over the output rows, each added in row order (the same bits
+  /// for any thread count and across a resume): rows, kinetic temperatures, the configurational
+  /// sums {|grad V|^2, Laplacian V} of the rows that have them; the heat at the last row.
+  bool conserved_tracking = false;
+  double conserved_initial = 0.0, conserved_final = 0.0, max_abs_conserved_drift = 0.0;
+  long thermostat_rows = 0;
+  double sum_kinetic_temperature = 0.0, sum_grad_squared = 0.0, sum_laplacian = 0.0, heat = 0.0;
 };
 
 /// H^n: the relative error to expect of momenta p read in the scene's polar chart at distance d

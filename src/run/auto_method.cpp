@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -142,6 +143,7 @@ void resolve_auto(Scene& scene) {
   if (!in.t_end) {
     throw InputError(file, "integrator.t_end", "missing required key (give it in [integrator] or with --t-end)");
   }
+  check_thermostat_method(scene, file, "integrator.method");  // not with a brownian thermostat
   const double tol = *in.tolerance;
   const double t_end = *in.t_end;
   AutoChoice choice;
@@ -151,7 +153,13 @@ void resolve_auto(Scene& scene) {
   sesi::parallel::set_threads(in.threads);
   const auto started = std::chrono::steady_clock::now();
 
-  Scene probe = scene;
+  // A thermostat runs with sesi2 only (check_thermostat_method): auto then picks its step alone,
+  // from pilot runs of the scene without the thermostat, whose energy error is the step's own (the
+  // thermostatted step is the same Strang step with momentum stages between its halves).
+  const bool thermostat = scene.thermostat.has_value();
+  Scene nve = scene;
+  nve.thermostat.reset();
+  Scene probe = nve;
   probe.integrator.method = "sesi2";
   const double energy0 = make_integrator(probe)->energy();
   if (!(std::abs(energy0) > 0) || !std::isfinite(energy0)) {
@@ -159,7 +167,7 @@ void resolve_auto(Scene& scene) {
                      "method = \"auto\" meets a relative energy error, but the scene's energy is " +
                          format_number(energy0) + "; choose a method and dt");
   }
-  const double tau = dynamical_time(scene, t_end);
+  const double tau = dynamical_time(nve, t_end);
   const double span = t_end > 0 ? t_end : 1.0;
   // Each pilot run: 20 dynamical times (a few orbits: the energy error of a symplectic method
   // oscillates with them, with its peaks at the closest approaches, and does not grow) or 1% of
@@ -167,7 +175,7 @@ void resolve_auto(Scene& scene) {
   // late in a short run would otherwise go unseen).
   const double pilot_t = span <= 40 * tau ? span : std::min(span, std::max(span / 100, 20 * tau));
   choice.pilot_t_end = pilot_t;
-  Pilot pilot{scene, pilot_t, energy0};
+  Pilot pilot{nve, pilot_t, energy0};
   const double aim = aim_fraction * tol;
   const double start = std::isfinite(tau) ? tau / 8 : pilot_t / 16;
 
@@ -181,7 +189,9 @@ void resolve_auto(Scene& scene) {
   // First pilot of each candidate: from `start`, a step whose error is above round-off and
   // below too_large_error; the step for the aim from the method's order.
   double best = inf;
-  for (std::string_view name : candidate_names) {
+  static constexpr std::array thermostat_candidates{std::string_view{"sesi2"}};
+  for (std::string_view name : thermostat ? std::span<const std::string_view>(thermostat_candidates)
+                                          : std::span<const std::string_view>(candidate_names)) {
     if (is_embedded_method(name) && !geodesic_ok) continue;
     const MethodInfo& info = *find_method_info(name);
     AutoCandidate c;
@@ -270,11 +280,20 @@ void resolve_auto(Scene& scene) {
     const double interval = std::abs(*in.dt) * static_cast<double>(in.output_every);
     in.output_every = std::max(1L, std::lround(interval / dt));
   }
-  choice.reason = pick->method + " at dt " + format_number(dt) + ": of " + std::to_string(choice.candidates.size()) +
-                  " methods, the cheapest to keep the relative energy error near " + format_number(aim) + " (" +
-                  format_number(aim_fraction) + " x the tolerance) in pilot runs of " + format_number(pilot_t) +
-                  " time units; predicted cost " + format_number(std::round(cost)) +
-                  " force evaluations (a geodesic one counted " + format_number(geodesic_stage_cost) + ")";
+  if (thermostat) {
+    choice.reason = pick->method + " at dt " + format_number(dt) + ": a " + scene.thermostat->kind +
+                    " thermostat runs with sesi2 only (its stages sit in the kick-drift-kick Strang step); the step "
+                    "keeps sesi2's relative energy error, in pilot runs of the scene without its thermostat, near " +
+                    format_number(aim) + " (" + format_number(aim_fraction) + " x the tolerance) over " +
+                    format_number(pilot_t) + " time units; predicted cost " + format_number(std::round(cost)) +
+                    " force evaluations";
+  } else {
+    choice.reason = pick->method + " at dt " + format_number(dt) + ": of " + std::to_string(choice.candidates.size()) +
+                    " methods, the cheapest to keep the relative energy error near " + format_number(aim) + " (" +
+                    format_number(aim_fraction) + " x the tolerance) in pilot runs of " + format_number(pilot_t) +
+                    " time units; predicted cost " + format_number(std::round(cost)) +
+                    " force evaluations (a geodesic one counted " + format_number(geodesic_stage_cost) + ")";
+  }
   in.method = pick->method;
   in.dt = in.dt && *in.dt < 0 ? -dt : dt;  // a negative given step: backwards, as asked
   in.auto_choice = std::move(choice);

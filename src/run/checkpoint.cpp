@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
@@ -269,6 +270,12 @@ std::string body_text(const Checkpoint& c) {
       out.str(c.method).num(c.pilot_dt).num(c.pilot_error).num(c.dt).num(c.cost).integer(c.refined ? 1 : 0);
     }
   }
+  if (scene.thermostat) {  // version 3
+    const ThermostatSpec& t = *scene.thermostat;
+    out.key("thermostat").str(t.kind).integer(static_cast<long long>(t.schedule.size()));
+    for (const auto& [time, kT] : t.schedule) out.num(time).num(kT);
+    out.num(t.gamma).num(t.tau).integer(t.chain).integer(static_cast<long long>(t.seed));
+  }
   out.key("guard").num(c.guard_energy).num(c.guard_scale);
   out.key("step").integer(c.step);
   if (c.state.embedded) {  // version 2: a geodesic method's state
@@ -281,6 +288,7 @@ std::string body_text(const Checkpoint& c) {
     for (const Eigen::MatrixXd& f : c.state.frames) out.matrix(f);
     out.key("cluster").integer(c.state.clustered ? 1 : 0);
     if (c.state.clustered) out.matrix(c.state.cluster);
+    if (scene.thermostat) out.key("thermostat_state").vector(c.state.thermostat);  // version 3
   }
   out.key("outputs")
       .integer(static_cast<long long>(c.outputs.trajectory_bytes))
@@ -296,6 +304,11 @@ std::string body_text(const Checkpoint& c) {
   out.key("max_distance").num(s.max_distance);
   out.key("exact_max").vector(c.recorder.exact_max_error);
   out.key("exact_last").vector(c.recorder.exact_last_error);
+  if (scene.thermostat) {  // version 3
+    out.key("thermostat_stats").integer(s.conserved_tracking ? 1 : 0).num(s.conserved_initial);
+    out.num(s.conserved_final).num(s.max_abs_conserved_drift).integer(s.thermostat_rows);
+    out.num(s.sum_kinetic_temperature).num(s.sum_grad_squared).num(s.sum_laplacian).num(s.heat);
+  }
   out.key("end");
   std::string text = out.text();
   text += '\n';
@@ -389,6 +402,24 @@ Checkpoint parse_body(std::string_view text, int version) {
     spec.tolerance = a.tolerance;
     spec.auto_choice = std::move(a);
   }
+  // A thermostatted run's scene (version 3 only).
+  if (in.optional_key("thermostat")) {
+    if (version != Checkpoint::thermostat_version) throw Corrupt{"it has a thermostat, which version 3 holds"};
+    ThermostatSpec t;
+    t.kind = in.str();
+    const long long knots = in.integer(1, 1 << 20);
+    for (long long k = 0; k < knots; ++k) {
+      const double time = in.num();
+      t.schedule.emplace_back(time, in.num());
+    }
+    t.gamma = in.num();
+    t.tau = in.num();
+    t.chain = static_cast<int>(in.integer(1, 1 << 20));
+    t.seed = static_cast<std::uint64_t>(in.integer(0, std::numeric_limits<long long>::max()));
+    scene.thermostat = std::move(t);
+  } else if (version == Checkpoint::thermostat_version) {
+    throw Corrupt{"expected its thermostat"};
+  }
   in.key("guard");
   c.guard_energy = in.num();
   c.guard_scale = in.num();
@@ -399,8 +430,10 @@ Checkpoint parse_body(std::string_view text, int version) {
                       : in.optional_key("x") ? Checkpoint::version
                                              : 0;
   if (written == 0) throw Corrupt{"expected its state ('q' or 'x')"};
-  if (written != version) throw OtherVersion{written};
-  if (version == Checkpoint::chart_version) {
+  // (Version 3's state is version 1's with the thermostat's after it.)
+  const bool chart = version == Checkpoint::chart_version || version == Checkpoint::thermostat_version;
+  if (written != (chart ? Checkpoint::chart_version : version)) throw OtherVersion{written};
+  if (chart) {
     c.state.q = in.matrix(dim, bodies);
     in.key("p");
     c.state.p = in.matrix(dim, bodies);
@@ -411,6 +444,10 @@ Checkpoint parse_body(std::string_view text, int version) {
     in.key("cluster");
     c.state.clustered = in.integer(0, 1) == 1;
     if (c.state.clustered) c.state.cluster = in.matrix(ambient, ambient);
+    if (version == Checkpoint::thermostat_version) {
+      in.key("thermostat_state");
+      c.state.thermostat = in.vector(1 << 20);
+    }
   } else {
     c.state.embedded = true;
     c.state.x = in.matrix(ambient, bodies);
@@ -446,6 +483,18 @@ Checkpoint parse_body(std::string_view text, int version) {
   c.recorder.exact_max_error = in.vector(bodies);
   in.key("exact_last");
   c.recorder.exact_last_error = in.vector(bodies);
+  if (version == Checkpoint::thermostat_version) {
+    in.key("thermostat_stats");
+    s.conserved_tracking = in.integer(0, 1) == 1;
+    s.conserved_initial = in.num();
+    s.conserved_final = in.num();
+    s.max_abs_conserved_drift = in.num();
+    s.thermostat_rows = static_cast<long>(in.integer());
+    s.sum_kinetic_temperature = in.num();
+    s.sum_grad_squared = in.num();
+    s.sum_laplacian = in.num();
+    s.heat = in.num();
+  }
   in.key("end");
   if (!in.at_end()) throw Corrupt{"it goes on after its end"};
   return c;
@@ -521,9 +570,11 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
       eol == std::string::npos) {
     throw refuse("the checkpoint's first line is malformed");
   }
-  if (version != Checkpoint::chart_version && version != Checkpoint::version) {
+  if (version != Checkpoint::chart_version && version != Checkpoint::version &&
+      version != Checkpoint::thermostat_version) {
     throw refuse("checkpoint format version " + std::to_string(version) + "; this sesi reads versions " +
-                 std::to_string(Checkpoint::chart_version) + " and " + std::to_string(Checkpoint::version));
+                 std::to_string(Checkpoint::chart_version) + ", " + std::to_string(Checkpoint::version) + " and " +
+                 std::to_string(Checkpoint::thermostat_version));
   }
   const std::string_view body = std::string_view(text).substr(eol + 1);
   if (body.size() != length) {
@@ -533,7 +584,8 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   if (fnv1a(body) != sum) throw refuse("the checkpoint is corrupted (checksum mismatch)");
   const std::string reads = "; this sesi reads format version " + std::to_string(Checkpoint::chart_version) +
                             " (a chart method's q and p) and " + std::to_string(Checkpoint::version) +
-                            " (a geodesic method's x and v)";
+                            " (a geodesic method's x and v), and version " +
+                            std::to_string(Checkpoint::thermostat_version) + " for a thermostatted run";
   Checkpoint c;
   try {
     c = parse_body(body, version);

@@ -45,13 +45,19 @@ struct RecorderState {
 
 struct Checkpoint {
   /// The format's versions: 1 holds a chart method's state (q, p, frames, cluster), 2 the same
-  /// but for a geodesic method's embedded state (x, v) in their place. A chart method's
-  /// checkpoint is still written as version 1 (what an older sesi reads), a geodesic method's as
-  /// version 2 (which an older sesi refuses as a version it does not read).
+  /// but for a geodesic method's embedded state (x, v) in their place, 3 a thermostatted run's:
+  /// version 1's with the scene's [thermostat], the thermostat's saved state (its step counter,
+  /// heat and chain variables: nothing random but the seed and the step) and the summary's
+  /// thermostat statistics. A chart method's NVE checkpoint is still written as version 1 (what
+  /// an older sesi reads), a geodesic method's as version 2, a thermostatted one as version 3
+  /// (which an older sesi refuses as a version it does not read).
   static constexpr int version = 2;
   static constexpr int chart_version = 1;
+  static constexpr int thermostat_version = 3;
   /// The version that holds this checkpoint's state.
-  int file_version() const { return state.embedded ? version : chart_version; }
+  int file_version() const {
+    return state.embedded ? version : scene.thermostat ? thermostat_version : chart_version;
+  }
   Scene scene;  ///< the scene model with the settings in force; bodies' q, p unused (see state)
   double guard_energy = 0.0, guard_scale = 0.0;  ///< the energy guard's E0 and K0 + |V0|
   long step = 0;  ///< the state is the one after this step

@@ -1,7 +1,9 @@
 #include "run_loop.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -82,14 +84,46 @@ class EncounterCheck {
   std::vector<Term> terms_;
 };
 
+/// Whether the scene's thermostat is brownian: overdamped dynamics conserve nothing, so its
+/// energy guard is off (non-finite states are still caught).
+bool brownian(const Scene& scene) { return scene.thermostat && scene.thermostat->kind == "brownian"; }
+
+/// What the energy guard judges at s: the energy, or with a thermostat the conserved quantity
+/// E + conserved_offset() (the energy itself moves by the heat the thermostat puts in; a step too
+/// large shows in the conserved quantity as in the energy of an NVE run). Brownian: the energy
+/// (its guard is off).
+double guarded_value(const Scene& scene, const Snapshot& s) {
+  return s.thermostat && !brownian(scene) ? s.conserved : s.energy;
+}
+
+double guard_threshold(const Scene& scene) {
+  if (brownian(scene)) return 0.0;  // off (sesi::EnergyGuard: relative <= 0)
+  return scene.integrator.energy_guard.value_or(sesi::EnergyGuard<double>::default_relative);
+}
+
 /// The energy guard of the scene (sesi::EnergyGuard), on the scale K0 + |V0| of its initial state.
 sesi::EnergyGuard<double> energy_guard(const Scene& scene, const Geometry& geometry, const Snapshot& s) {
   double kinetic = 0.0;
   for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
     kinetic += geometry.kinetic_energy(s.q.col(b), s.p.col(b), scene.bodies[static_cast<std::size_t>(b)].mass);
   }
-  const double threshold = scene.integrator.energy_guard.value_or(sesi::EnergyGuard<double>::default_relative);
-  return sesi::EnergyGuard<double>(s.energy, kinetic + std::abs(s.energy - kinetic), threshold);
+  return sesi::EnergyGuard<double>(guarded_value(scene, s), kinetic + std::abs(s.energy - kinetic),
+                                   guard_threshold(scene));
+}
+
+/// A thermostatted run's observables of the integrator's state at time t into s (its energy
+/// already there): the schedule's target, the temperatures, the heat and the conserved quantity.
+/// The configurational sums (a gradient and a Laplacian pass, more than the energy's) only where
+/// `row` says the state is an output row; else NaN until configurational() fills them in.
+void observe_thermostat(const Scene& scene, Integrator& integrator, double t, Snapshot& s, bool row) {
+  if (!scene.thermostat) return;
+  s.thermostat = true;
+  s.temperature = scene.thermostat->temperature_at(t);
+  s.kinetic_temperature = integrator.kinetic_temperature();
+  s.configurational = row ? integrator.configurational_sums()
+                          : std::array<double, 2>{std::nan(""), std::nan("")};
+  s.heat = integrator.heat();
+  s.conserved = s.energy + integrator.conserved_offset();
 }
 
 /// The step sizes: |dt| everywhere but the last step, which ends exactly at t_end. Times are
@@ -145,10 +179,6 @@ double initial_energy(const Scene& scene, Integrator& integrator) {
   return energy;
 }
 
-double guard_threshold(const Scene& scene) {
-  return scene.integrator.energy_guard.value_or(sesi::EnergyGuard<double>::default_relative);
-}
-
 /// The loop of every run: from step `first` of schedule, with the guard's reference given
 /// (a checkpoint's, a RunStart's) or taken from the first state (fresh: that state is also
 /// tracked and written). first_written: the first state is a row of the outputs already.
@@ -188,6 +218,7 @@ RunStart guard_reference(const Scene& scene, Integrator& integrator) {
   Snapshot s;
   integrator.read(s.q, s.p);
   s.energy = initial_energy(scene, integrator);
+  observe_thermostat(scene, integrator, 0.0, s, false);
   const sesi::EnergyGuard<double> guard = energy_guard(scene, Geometry(scene.space), s);
   RunStart start;
   start.guard_energy = guard.initial_energy();
@@ -231,11 +262,13 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   s.t = schedule.time(first);
   integrator.read(s.q, s.p);
   s.energy = initial_energy(scene, integrator);
+  observe_thermostat(scene, integrator, s.t, s, true);
   s.momentum = integrator.momentum_map();
   s.x = integrator.points();
   s.v = integrator.velocities();
   if (fresh) {
     recorder.track(s.energy, s.momentum);
+    if (s.thermostat) recorder.track_conserved(s.conserved);
     recorder.write_row(s);
   }
 
@@ -282,6 +315,9 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
       s.energy = integrator.energy();
       if (std::isfinite(s.energy)) {
         s.momentum = integrator.momentum_map();
+        // At every check (the guard judges the conserved quantity); the configurational sums at
+        // the output rows (a last state known good between rows gets them at the run's end).
+        observe_thermostat(scene, integrator, schedule.time(k), s, k % every == 0 || k == schedule.steps);
       } else {
         bad_body = std::max(1, integrator.body_with_non_finite_energy());
       }
@@ -304,10 +340,14 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
         return false;
       }
     }
-    const auto verdict = guard.check(k, schedule.time(k), s.energy);
+    const double judged = guarded_value(scene, s);
+    const auto verdict = guard.check(k, schedule.time(k), judged);
     if (verdict.status == sesi::GuardStatus::energy_error_exceeded) {
       outcome.reason = StopReason::energy_guard;
-      outcome.detail = "energy error exceeded: |E - E0| = " + format_short(std::abs(s.energy - guard.initial_energy())) +
+      const std::string change = format_short(std::abs(judged - guard.initial_energy()));
+      outcome.detail = (s.thermostat ? "conserved-quantity error exceeded: |C - C0| = " + change +
+                                           " (C = E + the thermostat's conserved offset)"
+                                     : "energy error exceeded: |E - E0| = " + change) +
                        ", " + format_short(verdict.error) + " times the initial energy scale " +
                        format_short(guard.scale()) + " (energy_guard = " + format_short(guard.relative()) + ")";
       return false;
@@ -345,6 +385,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
         integrator.read(s.q, s.p);
         s.v = integrator.velocities();
         recorder.track(s.energy, s.momentum);
+        if (s.thermostat) recorder.track_conserved(s.conserved);
         good_written = false;
         std::swap(good, s);
       }
@@ -358,6 +399,15 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
     const bool checkpoint = ((checkpoint_every > 0 && k % checkpoint_every == 0) || k == end_step) &&
                             (k != schedule.steps || last_on_grid);
     const bool check = row || checkpoint || k % check_every == 0;
+    if (scene.thermostat) {
+      // The temperature at the step's midpoint: the step is symmetric about it (its two halves
+      // mirror each other), so a schedule's ramp enters it as the midpoint rule, to second order
+      // like the step itself; the end points would lag or lead a ramp by h/2.
+      integrator.set_temperature(scene.thermostat->temperature_at(schedule.time(k - 1) + 0.5 * schedule.h(k)));
+      // The noise's step key is the run's step count (so a resumed run, a run cut into pieces
+      // and one run draw the same numbers).
+      integrator.set_thermostat_step(static_cast<std::uint64_t>(k - 1));
+    }
     try {
       integrator.step(schedule.time(k - 1), schedule.h(k));
     } catch (const InvariantFailure& e) {
@@ -381,6 +431,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
       integrator.read(s.q, s.p);
       s.v = integrator.velocities();
       recorder.track(s.energy, s.momentum);
+      if (s.thermostat) recorder.track_conserved(s.conserved);
       // A checkpoint's outputs hold the regular rows only: the last step's extra row is cut on
       // resume, since a longer run does not write it.
       if (checkpoint && !regular_row) take_checkpoint(k);
@@ -395,6 +446,11 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   // The outputs end at the last state known good: a row if it is not one yet, and the summary's
   // final state.
   outcome.steps_done = good.step;
+  // The integrator still holds that state unless a failure was found after it (failed_step): then
+  // its row has no configurational temperature (NaN).
+  if (!good_written && good.thermostat && outcome.failed_step == 0) {
+    good.configurational = integrator.configurational_sums();
+  }
   if (!good_written) recorder.write_row(good);
   recorder.set_final(std::move(good));
   return outcome;

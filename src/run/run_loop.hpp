@@ -4,7 +4,9 @@
 /// energy, momentum map, energy guard and close encounters every check_every steps and at every
 /// output row), stop at a failed check or a signal, and hand the conserved quantities (at the
 /// checks) and snapshots (every output_every steps, and the last state known good) to the
-/// recorder.
+/// recorder. With a thermostat (Scene::thermostat) it sets each step's temperature from the
+/// schedule and the noise's step key, hands the thermostat's observables on with every snapshot,
+/// and the energy guard judges the conserved quantity E + conserved_offset() (off for brownian).
 
 #include "integrator.hpp"
 #include "run_sink.hpp"

@@ -16,6 +16,9 @@ class RunSink {
   virtual ~RunSink() = default;
   /// Every checked step, from the initial state on (the integrator holds that state).
   virtual void track(double energy, const Eigen::VectorXd& momentum) = 0;
+  /// A thermostatted run's conserved quantity at every checked step, after track (Snapshot::
+  /// conserved; the summary's drift).
+  virtual void track_conserved(double conserved) { static_cast<void>(conserved); }
   /// One output row (every output_every steps, the first and the last).
   virtual void write_row(const Snapshot& s) = 0;
   /// The last state known good, with velocities.

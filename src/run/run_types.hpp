@@ -3,6 +3,7 @@
 /// What the run loop hands to the outputs, and how a run ended. Plain dynamic Eigen types, so
 /// that everything after the loop is compiled once, not once per (space, dimension).
 
+#include <array>
 #include <atomic>
 #include <functional>
 #include <string>
@@ -22,6 +23,14 @@ struct Snapshot {
   Eigen::MatrixXd x, v;  ///< embedding points and velocities, ambient x bodies (v: final only)
   double energy = 0.0;
   Eigen::VectorXd momentum;  ///< the momentum map (sesi::momentum_map)
+  /// A thermostatted run's observables (Integrator), else unset: the schedule's target kT at t,
+  /// the kinetic temperature 2K / N_f, the configurational sums {sum |grad V|^2, sum Laplacian V}
+  /// (their ratio is the configurational temperature), the heat the thermostat put in, and the
+  /// conserved quantity energy + Integrator::conserved_offset() (NaN for brownian).
+  bool thermostat = false;
+  double temperature = 0.0, kinetic_temperature = 0.0, heat = 0.0, conserved = 0.0;
+  std::array<double, 2> configurational{};
+  double configurational_temperature() const { return configurational[0] / configurational[1]; }
 };
 
 enum class StopReason { completed, non_finite, invariant_failed, interrupted, energy_guard, close_encounter };

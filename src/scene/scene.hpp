@@ -3,10 +3,12 @@
 /// A scene at run time: what a scene file (docs/scene-format.md) or the embedded default holds,
 /// validated and with every body's initial condition in chart coordinates (q, p).
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -137,6 +139,34 @@ struct IntegratorSpec {
   int line = 0;  ///< line of [integrator] in the scene file (0: none), for messages
 };
 
+/// The thermostat of a scene's `[thermostat]` table (docs/thermostats.md, docs/scene-format.md),
+/// run by sesi::Thermostat (include/sesi/thermostat.hpp). Temperatures are in energy units (k_B = 1).
+struct ThermostatSpec {
+  /// "langevin" (BAOAB), "nose-hoover" (a Nose-Hoover chain), "csvr" (stochastic velocity
+  /// rescaling) or "brownian" (overdamped, the BAOAB limit).
+  std::string kind;
+  /// The temperature as (t, kT) knots, piecewise linear in t and constant before the first knot
+  /// and after the last: a constant temperature is one knot (0, kT). Times strictly increasing.
+  std::vector<std::pair<double, double>> schedule;
+  double gamma = 0;  ///< langevin, brownian: the friction (1/time), > 0
+  double tau = 0;    ///< nose-hoover, csvr: the relaxation time, > 0
+  int chain = 3;     ///< nose-hoover: the chain length M >= 1
+  std::uint64_t seed = 0;  ///< the noise's key (langevin, csvr, brownian)
+  int line = 0;      ///< line of [thermostat] in the scene file (0: none), for messages
+
+  /// kT at time t (the schedule, linear between knots).
+  double temperature_at(double t) const {
+    if (schedule.empty()) return 0.0;
+    if (t <= schedule.front().first) return schedule.front().second;
+    if (t >= schedule.back().first) return schedule.back().second;
+    std::size_t k = 1;
+    while (schedule[k].first < t) ++k;
+    const auto [t0, T0] = schedule[k - 1];
+    const auto [t1, T1] = schedule[k];
+    return T0 + (T1 - T0) * ((t - t0) / (t1 - t0));
+  }
+};
+
 /// Exact solutions the program knows (the scene must match them; scene_reader checks).
 enum class ExactSolution { none, paper };
 
@@ -148,6 +178,7 @@ struct Scene {
   std::vector<PotentialSpec> potentials;
   IntegratorSpec integrator;
   ExactSolution exact = ExactSolution::none;
+  std::optional<ThermostatSpec> thermostat;  ///< `[thermostat]`, or none: constant energy (NVE)
 
   int dim() const { return space.dim; }
   int body_count() const { return static_cast<int>(bodies.size()); }

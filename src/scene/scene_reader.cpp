@@ -190,6 +190,12 @@ class TableReader {
     return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
   }
   bool has(std::string_view key) const { return table_.contains(key); }
+  /// The table's keys as written (unshielded).
+  std::vector<std::pair<std::string, Origin>> keys() const {
+    std::vector<std::pair<std::string, Origin>> out;
+    for (auto&& [key, node] : table_) out.emplace_back(unshield(key.str()), origin_of(key.source()));
+    return out;
+  }
   const toml::node* get(std::string_view key) const { return table_.get(key); }
 
   /// Refuse keys not in allowed, suggesting the nearest one.
@@ -315,6 +321,88 @@ class TableReader {
   const std::string& file_;
 };
 
+/// A [thermostat] table (docs/scene-format.md): kind, temperature (a number or a schedule
+/// [[t0, T0], [t1, T1], ...]) and the kind's own keys, each checked where it stands.
+ThermostatSpec read_thermostat(const TableReader& th) {
+  ThermostatSpec spec;
+  spec.line = th.origin().line;
+  if (!th.has("kind")) {
+    th.allow_only(all_thermostat_keys(), "[thermostat]");
+    th.missing("kind", one_of(thermostat_kinds()));
+  }
+  spec.kind = th.string("kind", "a string");
+  const auto keys = thermostat_keys(spec.kind);
+  if (keys.empty()) {
+    th.fail("kind", "unknown thermostat kind '" + cut_input(spec.kind) + "'" + did_you_mean(spec.kind, thermostat_kinds()) +
+                        " (expected " + one_of(thermostat_kinds()) + ")");
+  }
+  const auto takes = [&](std::string_view key) { return std::find(keys.begin(), keys.end(), key) != keys.end(); };
+  // A key of another kind (gamma with nose-hoover, seed with nose-hoover, ...): say whose it is.
+  const auto all = all_thermostat_keys();
+  for (const auto& [key, where] : th.keys()) {
+    if (takes(key) || std::find(all.begin(), all.end(), key) == all.end()) continue;
+    throw InputError(where, th.key_path(key),
+                     "not a key of a " + spec.kind + " thermostat (" + key + " goes with " + kinds_taking(key) +
+                         "; " + spec.kind + " takes " + one_of(keys) + ")");
+  }
+  th.allow_only(keys, "a " + spec.kind + " thermostat");
+
+  const std::string expected_temperature = "a finite temperature kT" + std::string(spec.kind == "nose-hoover" ? " > 0" : " >= 0");
+  const toml::node* temperature = th.get("temperature");
+  if (!temperature) {
+    th.missing("temperature", "kT in energy units (k_B = 1), or a schedule [[t0, T0], [t1, T1], ...]");
+  }
+  if (const auto* knots = temperature->as_array()) {
+    // A schedule: (t, kT) knots, t strictly increasing, linear between them (ThermostatSpec).
+    if (knots->empty()) {
+      th.fail("temperature", "expected a schedule of one or more [t, T] pairs, got an empty array");
+    }
+    for (std::size_t k = 0; k < knots->size(); ++k) {
+      const toml::node& item = *knots->get(k);
+      const std::string key = th.key_path("temperature") + "[" + std::to_string(k + 1) + "]";
+      const auto* pair = item.as_array();
+      if (!pair || pair->size() != 2) {
+        throw InputError(th.origin_of(item.source()), key,
+                         "expected a pair [t, T] (a time and the temperature there), got " +
+                             (pair ? "an array of " + std::to_string(pair->size()) : std::string(type_name(item))));
+      }
+      const double t = th.to_number(*pair->get(0), key + "[1]", "a finite time");
+      const double kT = th.to_number(*pair->get(1), key + "[2]", expected_temperature);
+      if (k > 0 && !(t > spec.schedule.back().first)) {
+        throw InputError(th.origin_of(pair->get(0)->source()), key + "[1]",
+                         "the schedule's times must increase strictly, got " + format_number(t) + " after " +
+                             format_number(spec.schedule.back().first));
+      }
+      check_temperature(kT, spec.kind, th.origin_of(pair->get(1)->source()), key + "[2]");
+      spec.schedule.emplace_back(t, kT);
+    }
+  } else {
+    const double kT = th.to_number(*temperature, th.key_path("temperature"),
+                                   expected_temperature + " (or a schedule [[t0, T0], [t1, T1], ...])");
+    check_temperature(kT, spec.kind, th.origin_of("temperature"), th.key_path("temperature"));
+    spec.schedule = {{0.0, kT}};
+  }
+  if (takes("gamma")) {
+    spec.gamma = th.number("gamma", "a finite friction gamma > 0 (1/time)");
+    check_friction(spec.gamma, th.origin_of("gamma"), th.key_path("gamma"));
+  }
+  if (takes("tau")) {
+    spec.tau = th.number("tau", "a finite relaxation time tau > 0");
+    check_relaxation_time(spec.tau, th.origin_of("tau"), th.key_path("tau"));
+  }
+  if (takes("chain") && th.has("chain")) {
+    const long chain = th.integer("chain", "an integer from 1 to " + std::to_string(max_chain));
+    check_chain(chain, th.origin_of("chain"), th.key_path("chain"));
+    spec.chain = static_cast<int>(chain);
+  }
+  if (takes("seed") && th.has("seed")) {
+    const long seed = th.integer("seed", "an integer from 0 to 2^63 - 1");
+    check_seed(seed, th.origin_of("seed"), th.key_path("seed"));
+    spec.seed = static_cast<std::uint64_t>(seed);
+  }
+  return spec;
+}
+
 /// Where each body and potential came from, for the checks that involve several of them.
 struct Provenance {
   std::vector<Origin> bodies;             // the [[bodies]] tables
@@ -328,7 +416,7 @@ class SceneReader {
 
   Scene read() {
     static constexpr std::array keys = {"name"sv, "space"sv, "bodies"sv, "potential"sv,
-                                        "integrator"sv, "exact"sv};
+                                        "integrator"sv, "thermostat"sv, "exact"sv};
     root_.allow_only(keys, "the scene");
     scene_.source = file_;
     scene_.name = read_name();
@@ -336,6 +424,7 @@ class SceneReader {
     read_bodies();
     read_potentials();
     read_integrator();
+    read_thermostat_table();
     check_far_reach();  // (beyond it, the distances check_bodies_apart measures mean nothing)
     check_bodies_apart();
     read_exact();
@@ -580,6 +669,7 @@ class SceneReader {
     if (in.has("method")) {
       spec.method = in.string("method", "a method name or \"auto\"");
       check_method_or_auto(spec.method, in.origin_of("method"), in.key_path("method"));
+      method_origin_ = in.origin_of("method");
     }
     if (in.has("tolerance")) {
       spec.tolerance = in.number("tolerance", "a max relative energy error");
@@ -638,6 +728,19 @@ class SceneReader {
       }
     }
     if (spec.dt && spec.t_end) check_step_count(*spec.t_end, *spec.dt, in.origin(), in.path());
+  }
+
+  /// [thermostat]: with it, the method is sesi2 unless the scene names one (which must then be
+  /// sesi2 or auto: check_thermostat_method).
+  void read_thermostat_table() {
+    const toml::table* table = root_.table("thermostat");
+    if (!table) return;
+    scene_.thermostat = read_thermostat(TableReader(*table, "thermostat", file_));
+    if (!method_origin_) {
+      scene_.integrator.method = "sesi2";
+      return;
+    }
+    check_thermostat_method(scene_, *method_origin_, "integrator.method");
   }
 
   /// No two bodies (or a body and a center) where a potential is singular.
@@ -770,6 +873,7 @@ class SceneReader {
   Scene scene_;
   std::optional<Geometry> geometry_;
   Provenance provenance_;
+  std::optional<Origin> method_origin_;  ///< where [integrator] method was given
 };
 
 }  // namespace
@@ -794,6 +898,10 @@ std::span<const PotentialInfo> potential_catalogue() {
 
 Scene read_scene_table(const toml::table& root, const std::string& source) {
   return SceneReader(root, source).read();
+}
+
+ThermostatSpec read_thermostat_table(const toml::table& table, const std::string& source) {
+  return read_thermostat(TableReader(table, "thermostat", source));
 }
 
 Scene read_scene_text(std::string_view text, const std::string& path) {

@@ -15,4 +15,8 @@ namespace sesi::program {
 /// the default name. Nodes built in memory have no line, so messages name the key path only.
 Scene read_scene_table(const toml::table& root, const std::string& source);
 
+/// Read and check a [thermostat] table alone (the Python package's Simulation.thermostat), with
+/// the scene reader's rules and messages (keys named "thermostat.KEY").
+ThermostatSpec read_thermostat_table(const toml::table& table, const std::string& source);
+
 }  // namespace sesi::program

@@ -1,6 +1,8 @@
 #include "validate.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -221,6 +223,121 @@ void check_far_resolution(double radii, int dim, const Origin& origin, std::stri
                        " radii); move the scene nearer the origin by an isometry, which changes nothing else");
 }
 
+namespace {
+
+using namespace std::string_view_literals;
+
+constexpr std::array thermostat_kind_names = {"langevin"sv, "nose-hoover"sv, "csvr"sv, "brownian"sv};
+constexpr std::array langevin_keys = {"kind"sv, "temperature"sv, "gamma"sv, "seed"sv};
+constexpr std::array nose_hoover_keys = {"kind"sv, "temperature"sv, "tau"sv, "chain"sv};
+constexpr std::array csvr_keys = {"kind"sv, "temperature"sv, "tau"sv, "seed"sv};
+constexpr std::array brownian_keys = {"kind"sv, "temperature"sv, "gamma"sv, "seed"sv};
+constexpr std::array any_thermostat_keys = {"kind"sv, "temperature"sv, "gamma"sv, "tau"sv, "chain"sv, "seed"sv};
+
+}  // namespace
+
+std::span<const std::string_view> thermostat_kinds() { return thermostat_kind_names; }
+
+std::span<const std::string_view> thermostat_keys(std::string_view kind) {
+  if (kind == "langevin") return langevin_keys;
+  if (kind == "nose-hoover") return nose_hoover_keys;
+  if (kind == "csvr") return csvr_keys;
+  if (kind == "brownian") return brownian_keys;
+  return {};
+}
+
+std::span<const std::string_view> all_thermostat_keys() { return any_thermostat_keys; }
+
+std::string kinds_taking(std::string_view key) {
+  std::vector<std::string_view> kinds;
+  for (std::string_view kind : thermostat_kind_names) {
+    const auto keys = thermostat_keys(kind);
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) kinds.push_back(kind);
+  }
+  return one_of(kinds);
+}
+
+void check_temperature(double kT, std::string_view kind, const Origin& origin, std::string_view key) {
+  if (kind == "nose-hoover") {
+    if (!(kT > 0.0) || !std::isfinite(kT)) {
+      throw InputError(origin, key,
+                       "expected a finite temperature kT > 0 for a nose-hoover thermostat (its chain masses "
+                       "Q = N_f kT tau^2 vanish at 0), got " + format_number(kT));
+    }
+    return;
+  }
+  if (!(kT >= 0.0) || !std::isfinite(kT)) {
+    throw InputError(origin, key, "expected a finite temperature kT >= 0 (energy units, k_B = 1), got " + format_number(kT));
+  }
+}
+
+void check_friction(double gamma, const Origin& origin, std::string_view key) {
+  if (!(gamma > 0.0) || !std::isfinite(gamma)) {
+    throw InputError(origin, key, "expected a finite friction gamma > 0 (1/time), got " + format_number(gamma));
+  }
+}
+
+void check_relaxation_time(double tau, const Origin& origin, std::string_view key) {
+  if (!(tau > 0.0) || !std::isfinite(tau)) {
+    throw InputError(origin, key, "expected a finite relaxation time tau > 0, got " + format_number(tau));
+  }
+}
+
+void check_chain(long chain, const Origin& origin, std::string_view key) {
+  if (chain < 1 || chain > max_chain) {
+    throw InputError(origin, key,
+                     "expected an integer from 1 to " + std::to_string(max_chain) +
+                         " (the Nose-Hoover chain's length), got " + std::to_string(chain));
+  }
+}
+
+void check_seed(long long seed, const Origin& origin, std::string_view key) {
+  if (seed < 0) {
+    throw InputError(origin, key, "expected an integer from 0 to 2^63 - 1 (the noise's key), got " + std::to_string(seed));
+  }
+}
+
+void check_thermostat_method(const Scene& scene, const Origin& origin, std::string_view key) {
+  if (!scene.thermostat) return;
+  const std::string& method = scene.integrator.method;
+  if (method == "sesi2") return;
+  if (method == "auto") {
+    if (scene.thermostat->kind != "brownian") return;
+    throw InputError(origin, key,
+                     "method \"auto\" meets an energy error, but a brownian thermostat's overdamped step conserves no "
+                     "energy; give method = \"sesi2\" and dt");
+  }
+  throw InputError(origin, key,
+                   "a thermostat runs with method \"sesi2\" (its stages sit in the kick-drift-kick Strang step; "
+                   "docs/thermostats.md), or \"auto\", which then picks sesi2; got \"" + cut_input(method) + "\"");
+}
+
+void check_thermostat(const ThermostatSpec& spec, const Origin& origin) {
+  const auto keys = thermostat_keys(spec.kind);
+  if (keys.empty()) {
+    throw InputError(origin, "thermostat.kind",
+                     "unknown thermostat kind '" + cut_input(spec.kind) + "' (expected " + one_of(thermostat_kind_names) + ")");
+  }
+  const auto takes = [&](std::string_view key) { return std::find(keys.begin(), keys.end(), key) != keys.end(); };
+  if (spec.schedule.empty()) throw InputError(origin, "thermostat.temperature", "missing (no temperature)");
+  for (std::size_t k = 0; k < spec.schedule.size(); ++k) {
+    const std::string key = "thermostat.temperature[" + std::to_string(k + 1) + "]";
+    const auto [t, kT] = spec.schedule[k];
+    if (!std::isfinite(t)) throw InputError(origin, key + "[1]", "expected a finite time, got " + format_number(t));
+    if (k > 0 && !(t > spec.schedule[k - 1].first)) {
+      throw InputError(origin, key + "[1]", "the schedule's times must increase strictly, got " + format_number(t) +
+                                                " after " + format_number(spec.schedule[k - 1].first));
+    }
+    check_temperature(kT, spec.kind, origin, key + "[2]");
+  }
+  if (takes("gamma")) check_friction(spec.gamma, origin, "thermostat.gamma");
+  if (takes("tau")) check_relaxation_time(spec.tau, origin, "thermostat.tau");
+  if (takes("chain")) check_chain(spec.chain, origin, "thermostat.chain");
+  if (spec.seed > static_cast<std::uint64_t>(std::numeric_limits<long long>::max())) {
+    throw InputError(origin, "thermostat.seed", "expected an integer from 0 to 2^63 - 1, got " + std::to_string(spec.seed));
+  }
+}
+
 void check_scene_model(const Scene& scene, const Origin& origin) {
   if (scene.space.dim < 1) throw InputError(origin, "space.dim", "expected an integer >= 1, got " + std::to_string(scene.space.dim));
   if (scene.space.kind != SpaceKind::euclidean) check_radius(scene.space.radius, origin, "space.radius");
@@ -245,6 +362,10 @@ void check_scene_model(const Scene& scene, const Origin& origin) {
   check_neighbour_skin(in.neighbour_skin, origin, "integrator.neighbour_skin");
   if (in.energy_guard && *in.energy_guard != 0.0) check_energy_guard(*in.energy_guard, origin, "integrator.energy_guard");
   if (in.tolerance) check_tolerance(*in.tolerance, origin, "integrator.tolerance");
+  if (scene.thermostat) {
+    check_thermostat(*scene.thermostat, origin);
+    check_thermostat_method(scene, origin, "integrator.method");
+  }
 }
 
 }  // namespace sesi::program

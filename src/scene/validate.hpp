@@ -4,6 +4,7 @@
 /// InputError naming the origin and key when the value breaks the rule.
 
 #include <functional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -81,6 +82,35 @@ double far_resolution(double radii);
 /// Throws InputError at origin and key when far_resolution(radii) > far_resolution_limit, for a
 /// body or force centre of a scene on H^dim (dim >= 2).
 void check_far_resolution(double radii, int dim, const Origin& origin, std::string_view key);
+/// The thermostat kinds of a [thermostat] table ("langevin", "nose-hoover", "csvr", "brownian"),
+/// and the keys a kind takes ("kind" first; empty for an unknown kind). docs/scene-format.md.
+std::span<const std::string_view> thermostat_kinds();
+std::span<const std::string_view> thermostat_keys(std::string_view kind);
+/// Every key some kind takes (for a table without kind), and the kinds that take a key, in words.
+std::span<const std::string_view> all_thermostat_keys();
+std::string kinds_taking(std::string_view key);
+/// The longest Nose-Hoover chain (Martyna, Klein and Tuckerman use M = 3 to 5; a longer one only
+/// costs time and checkpoint size).
+inline constexpr long max_chain = 100;
+/// A thermostat's temperature kT (k_B = 1): finite and >= 0; > 0 for nose-hoover, whose chain
+/// masses Q_1 = N_f kT tau^2, Q_j = kT tau^2 vanish at kT = 0.
+void check_temperature(double kT, std::string_view kind, const Origin& origin, std::string_view key);
+/// gamma (langevin, brownian): a finite friction > 0 (1/time).
+void check_friction(double gamma, const Origin& origin, std::string_view key);
+/// tau (nose-hoover, csvr): a finite relaxation time > 0.
+void check_relaxation_time(double tau, const Origin& origin, std::string_view key);
+/// chain (nose-hoover): an integer from 1 to max_chain.
+void check_chain(long chain, const Origin& origin, std::string_view key);
+/// seed: an integer from 0 to 2^63 - 1 (TOML's integers are signed 64-bit).
+void check_seed(long long seed, const Origin& origin, std::string_view key);
+/// A thermostat runs with sesi2 only (its stages sit in the kick-drift-kick Strang step,
+/// include/sesi/thermostat.hpp), or "auto" before it is resolved (which then picks sesi2; not for
+/// brownian, whose step is no energy-conserving step). Nothing without a thermostat.
+void check_thermostat_method(const Scene& scene, const Origin& origin, std::string_view key);
+/// The whole of a ThermostatSpec by the rules above (keys named "thermostat.KEY", all at origin):
+/// the kind, its schedule (times strictly increasing), its parameters.
+void check_thermostat(const ThermostatSpec& spec, const Origin& origin);
+
 /// A scene model that did not come from a scene file (a checkpoint's), by the rules the scene
 /// reader applies to one: the radius, the masses, the potentials and the integrator's settings
 /// (keys named as in a scene file, all at origin).

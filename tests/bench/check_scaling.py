@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Runs a small `sesi bench --scaling` (issue #11) and checks scaling.csv: the columns the docs
 name, one row per (N, method, threads) for the space asked for and for the flat E^3 reference,
-and a flat cell-list row per N for Lennard-Jones; positive times; pairs per step equal to the
+and a flat cell-list row per N for Lennard-Jones; with sesi2, a row per thermostat (sesi2+langevin,
+sesi2+nose-hoover; issue #25) per (N, threads) and its ratio to the NVE sesi2 step in the summary; positive times; pairs per step equal to the
 pairs within the cutoff times the force evaluations per step (so ns_per_pair is what it says);
 and that bad options are refused with exit status 2, one line naming the option, nothing written.
 Timings are not checked: speed targets live in the benchmark (docs/benchmarks.md)."""
@@ -56,7 +57,8 @@ def main():
         (["--space", "sphere", "--dim", "2", "--potential", "cotangent-gravity", "--n", "100", "--steps", "4",
           "--methods", "sesi4"], "sphere", 2, 1, False),
     ]
-    stages = {"sesi2": 1, "sesi4": 3}
+    stages = {"sesi2": 1, "sesi4": 3, "sesi2+langevin": 1, "sesi2+nose-hoover": 1}
+    thermostats = ["sesi2+langevin", "sesi2+nose-hoover"]
     for args, space, dim, threads_given, lj in cases:
         out = os.path.join(a.work, f"scaling-{space}{dim}{'-lj' if lj else '-gravity'}")
         r = run(args, out)
@@ -75,7 +77,8 @@ def main():
         methods = args[args.index("--methods") + 1].split(",") if "--methods" in args else ["sesi2"]
         distances = [float(d) for d in args[args.index("--center-distance") + 1].split(",")] \
             if "--center-distance" in args else [0.0]
-        expected = len(sizes) * (len(methods) * threads_given * (len(distances) + 1) + (1 if lj else 0))
+        timed = len(thermostats) * threads_given if "sesi2" in methods else 0
+        expected = len(sizes) * (len(methods) * threads_given * (len(distances) + 1) + timed + (1 if lj else 0))
         if len(rows) != expected:
             failures.append(f"{args}: {len(rows)} rows, expected {expected}")
         for row in rows:
@@ -99,10 +102,18 @@ def main():
                 failures.append(f"{args}: gravity pairs per step {pairs}, expected {n * (n - 1) / 2 * per_step}")
             if lj and not (0.5 * n * per_step < pairs < 20 * n * per_step):
                 failures.append(f"{args}: {pairs} Lennard-Jones pairs per step at density 1/2 for {n} bodies")
+        if "sesi2" in methods:
+            for n in sizes:
+                for name in thermostats:
+                    got = [row for row in rows if row["method"] == name and int(row["n_bodies"]) == n]
+                    if len(got) != threads_given or any(row["space"] != space for row in got):
+                        failures.append(f"{args}: {len(got)} {name} rows at N = {n}, expected {threads_given}")
+            if "/ NVE sesi2" not in r.stdout:
+                failures.append(f"{args}: no thermostat / NVE ratio in the summary")
         if len(distances) > 1:
             for n in sizes:
                 seen = sorted(float(row["center_distance"]) for row in rows
-                              if row["space"] == space and int(row["n_bodies"]) == n)
+                              if row["space"] == space and int(row["n_bodies"]) == n and "+" not in row["method"])
                 if seen != sorted(distances):
                     failures.append(f"{args}: distances {seen} at N = {n}")
             if "far (5 R) / origin" not in r.stdout:

@@ -1,13 +1,14 @@
-// The Langevin thermostat (include/sesi/thermostat.hpp, BAOAB) and its counter-based normals
-// (include/sesi/random.hpp); issue #25, docs/thermostats.md.
+// The thermostat as a stage of the composition engine (include/sesi/thermostat.hpp, stepper.hpp)
+// and its counter-based normals (include/sesi/random.hpp); issue #25, docs/thermostats.md.
 //
 //  - gamma = 0 is the engine's kick-drift-kick Strang step bit for bit (S^2, H^2);
 //  - the normals are a pure function of their key; a run is a pure function of (seed, state,
-//    step counter): the same seed gives the same trajectory, a resumed run the same bits, one
-//    thread and two the same bits;
-//  - one body in a well samples the exact Boltzmann marginal of its distance to the well's
-//    centre (S^2: chord well, H^2: central harmonic well) and the kinetic energy's chi-squared
-//    law, by Kolmogorov-Smirnov tests at the 1 % level for the number of samples.
+//    step counter): the same seed gives the same trajectory, a resumed run (save()/load()) the
+//    same bits, one thread and two the same bits and the same heat;
+//  - the heat is the kinetic energy the stages put in (free bodies: H - H0 = heat to round-off);
+//  - the runtime table and the re-charting wrapper (the program's engine) step as the fixed one;
+//  - bad parameters and a thermostat with a table of several stages are refused.
+// The sampling tests: thermostat_langevin.cpp, thermostat_brownian.cpp, thermostat_bias.cpp.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -22,7 +23,7 @@
 #include "common.hpp"
 
 #include <sesi/random.hpp>
-#include <sesi/special_functions.hpp>
+#include <sesi/recharting.hpp>
 #include <sesi/thermostat.hpp>
 
 namespace {
@@ -129,152 +130,146 @@ TEST_CASE("langevin: the same bits on one thread and on two (600 bodies: the thr
     sesi::LangevinBAOAB<S2> stepper(1.0, 3.0, 5);
     for (int k = 0; k < 20; ++k) stepper.do_step(sys, x, k * 0.01, 0.01);
     sesi::parallel::set_threads(0);
-    return x;
+    return std::make_pair(x, stepper.stage().heat());
   };
-  const auto one = run_on(1), two = run_on(2);
+  const auto [one, heat_one] = run_on(1);
+  const auto [two, heat_two] = run_on(2);
   CHECK(one.q == two.q);
   CHECK(one.p == two.p);
+  CHECK(heat_one == heat_two);  // summed in body order, whatever the threads
+  CHECK(heat_one != 0.0);
 }
 
-// ---- the canonical distribution ---------------------------------------------------------------
+// ---- the stage's bookkeeping ------------------------------------------------------------------
 
-/// The Kolmogorov-Smirnov statistic sup |F_N - F| of the sample against the CDF F.
-double ks_statistic(std::vector<double> x, const std::function<double(double)>& cdf) {
-  std::sort(x.begin(), x.end());
-  const double n = static_cast<double>(x.size());
-  double d = 0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double f = cdf(x[i]);
-    d = std::max({d, (static_cast<double>(i) + 1) / n - f, f - static_cast<double>(i) / n});
-  }
-  return d;
+sesi::ThermostatParams<double> params(sesi::ThermostatKind kind) {
+  sesi::ThermostatParams<double> p;
+  p.kind = kind;
+  p.kT = 0.7;
+  p.gamma = 2.0;
+  p.tau = 0.1;
+  p.chain = 3;
+  p.seed = 42;
+  return p;
 }
-/// The 1 % critical value of the KS statistic for N samples (asymptotic: 1.628 / sqrt(N)).
-double ks_critical(std::size_t n) { return 1.63 / std::sqrt(static_cast<double>(n)); }
+constexpr sesi::ThermostatKind all_kinds[] = {sesi::ThermostatKind::langevin, sesi::ThermostatKind::nose_hoover,
+                                              sesi::ThermostatKind::csvr, sesi::ThermostatKind::brownian};
 
-/// The CDF of a density on [0, b] by the cumulative trapezoidal rule on m intervals, read by
-/// linear interpolation (the density here is smooth: the error is O((b/m)^2), below 1e-9).
-struct QuadratureCdf {
-  double b;
-  std::vector<double> c;
-  QuadratureCdf(const std::function<double(double)>& density, double b_, int m) : b(b_), c(static_cast<std::size_t>(m) + 1) {
-    const double h = b / m;
-    c[0] = 0;
-    for (int i = 1; i <= m; ++i)
-      c[static_cast<std::size_t>(i)] = c[static_cast<std::size_t>(i) - 1] + h / 2 * (density((i - 1) * h) + density(i * h));
-    for (double& v : c) v /= c.back();
+TEST_CASE("thermostat: free bodies gain exactly the heat (every kind, S^1)") {
+  // Free bodies on S^1: no potential, one level whose flow is exact and keeps K = p^2/2m, so
+  // H(t) - H(0) = K(t) - K(0) is the sum of the stages' kinetic-energy changes, heat(). (On S^n,
+  // n >= 2, the split kinetic sweep itself changes K by the step's O(h^2) error.) Each step rounds
+  // a few times at the size of eps K per body (O, the rescale, the sums): over 400 steps of 40
+  // bodies the difference stays below 400 * 40 * 8 eps * max K (a generous count of roundings).
+  using S1 = sesi::Sphere<1, double>;
+  const S1 chart(1.0);
+  const sesi::System sys(chart, std::vector<double>(40, 1.0));
+  sesi::State<S1> x0(1, 40);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int b = 0; b < 40; ++b) x0.set_body(b, {6.28 * u(rng)}, {u(rng) - 0.5});
+  for (const auto kind : all_kinds) {
+    sesi::Thermostatted<S1> st{sesi::Thermostat<S1>(params(kind))};
+    auto x = x0;
+    const double k0 = sys.kinetic_energy(x);
+    double kmax = k0;
+    for (int k = 0; k < 400; ++k) {
+      st.do_step(sys, x, k * 0.01, 0.01);
+      kmax = std::max(kmax, sys.kinetic_energy(x));
+    }
+    const double gained = sys.kinetic_energy(x) - k0;
+    CAPTURE(static_cast<int>(kind));
+    CHECK(st.stage().step() == 400);
+    CHECK(std::abs(st.stage().heat()) > 1e-3);  // it did act: kT/2 = 0.35 per body against K0/N ~ 1/24
+    CHECK(std::abs(gained - st.stage().heat()) < 400.0 * 40 * 8 * coretest::eps<double>() * kmax);
+    if (kind == sesi::ThermostatKind::brownian) {
+      CHECK(std::isnan(st.stage().conserved_offset()));
+    } else if (kind != sesi::ThermostatKind::nose_hoover) {
+      CHECK(st.stage().conserved_offset() == -st.stage().heat());
+    }
   }
-  double operator()(double x) const {
-    if (x <= 0) return 0;
-    if (x >= b) return 1;
-    const double u = x / b * static_cast<double>(c.size() - 1);
-    const auto i = static_cast<std::size_t>(u);
-    const double w = u - static_cast<double>(i);
-    return i + 1 < c.size() ? (1 - w) * c[i] + w * c[i + 1] : 1.0;
-  }
-};
-
-/// V = k/2 d(x, c)^2 about a centre c of H^n (radius 1): gradient k d grad d, as
-/// Hyperbolic::distance_gradient writes grad d (its d / sinh d by special::sinhc, smooth at d = 0).
-struct HyperbolicWell {
-  using Ambient = H2::Ambient;
-  double k;
-  Ambient c;
-  double value(const H2& space, const Ambient& x, double m) const {
-    const double d = space.distance(x, c);
-    return m * k / 2 * d * d;
-  }
-  void gradient(const H2& space, const Ambient& x, double m, Ambient& g) const {
-    const double d = space.distance(x, c);
-    const double ab = x.head<2>().dot(c.head<2>()) - x[2] * c[2];  // <x, c>_L = -cosh d
-    g = -(c + ab * x);
-    g[2] = -g[2];
-    g *= m * k / sesi::special::sinhc(d);
-  }
-};
-
-struct Samples {
-  std::vector<double> distance, two_k;  // distance to the centre, 2 K / kT
-};
-
-/// One body of unit mass started at rest at the well's centre, thermalised for `burn` steps, then
-/// sampled every `stride` steps.
-template <class Sys>
-Samples sample(const Sys& sys, const typename Sys::Chart::Point& q0, const typename Sys::Chart::Ambient& centre,
-               double kT, double gamma, double dt, int burn, int stride, int n, std::uint64_t seed) {
-  using Chart = typename Sys::Chart;
-  sesi::State<Chart> x(2, 1);
-  x.q.col(0) = q0;
-  sesi::LangevinBAOAB<Chart> stepper(kT, gamma, seed);
-  long k = 0;
-  for (; k < burn; ++k) stepper.do_step(sys, x, k * dt, dt);
-  Samples s;
-  typename Chart::Point q(2);
-  typename Chart::Ambient y(3);
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < stride; ++i, ++k) stepper.do_step(sys, x, k * dt, dt);
-    q = x.q.col(0);
-    sys.chart().embed(q, y);
-    s.distance.push_back(sys.chart().distance(y, centre));
-    s.two_k.push_back(2 * sys.kinetic_energy(x) / kT);
-  }
-  return s;
 }
 
-// The runs: kT = 1, m = 1, well stiffness k = 40 (frequency omega = sqrt(40) = 6.3, spread of the
-// distance ~ 1/sqrt(40) = 0.16, far from the charts' singular points: the S^2 centre is 1 rad
-// from the pole, the H^2 centre at radius 1.5), friction gamma = 10 (damped oscillation, decay
-// rate gamma/2 = 5), dt = 0.005, N = 10000 samples every 200 steps (1 time unit: correlation
-// e^-5 < 1 %, so the samples are close to independent and the KS law applies), after 2000 steps
-// (10 time units) from rest at the centre.
-// The bias: BAOAB's configurational error is O(h^2); for this well it is of relative size
-// (omega h)^2 = 1e-3 (exact for a harmonic well with one exact A flow; the hierarchical A sweep
-// adds an error of that order), so the CDF moves by about 1e-3 times max x f(x) < 1e-3, and the
-// kinetic law by the same order: both well below the KS resolution 1.63 / sqrt(N) = 0.0163.
-constexpr double well_kT = 1, well_k = 40, well_gamma = 10, well_dt = 0.005;
-constexpr int well_burn = 2000, well_stride = 200, well_samples = 10000;
-
-void check_ks(const char* what, const std::vector<double>& x, const std::function<double(double)>& cdf) {
-  const double d = ks_statistic(x, cdf), crit = ks_critical(x.size());
-  MESSAGE(std::string(what), ": KS statistic ", d, " against the 1 % critical value ", crit, " (N = ", x.size(), ")");
-  CHECK(d < crit);
+TEST_CASE("thermostat: save() and load() resume every kind bit for bit (S^2, trap and pair term)") {
+  const auto sys = make_scene<S2>();
+  const auto x0 = initial_state(sys);
+  const double dt = 0.01;
+  for (const auto kind : all_kinds) {
+    CAPTURE(static_cast<int>(kind));
+    sesi::Thermostatted<S2> whole{sesi::Thermostat<S2>(params(kind))};
+    sesi::Thermostatted<S2> first{sesi::Thermostat<S2>(params(kind))};
+    auto a = x0, b = x0;
+    for (int k = 0; k < 200; ++k) whole.do_step(sys, a, k * dt, dt);
+    for (int k = 0; k < 100; ++k) first.do_step(sys, b, k * dt, dt);
+    // A fresh engine (no trig cache, no kept gradient) with the saved stage.
+    sesi::Thermostatted<S2> second{sesi::Thermostat<S2>(params(kind))};
+    second.stage().load(first.stage().save());
+    CHECK(second.stage().step() == 100);
+    for (int k = 100; k < 200; ++k) second.do_step(sys, b, k * dt, dt);
+    CHECK(a.q == b.q);
+    CHECK(a.p == b.p);
+    CHECK(whole.stage().heat() == second.stage().heat());
+    if (kind != sesi::ThermostatKind::brownian)
+      CHECK(whole.stage().conserved_offset() == second.stage().conserved_offset());
+  }
 }
 
-/// 2K / kT of one body on a 2-dimensional space: chi-squared with 2 degrees of freedom.
-double chi2_2_cdf(double x) { return x <= 0 ? 0 : -std::expm1(-x / 2); }
-
-TEST_CASE("langevin: one body in a chord well on S^2 samples sin(a) exp(-V/kT) and chi-squared(2)") {
-  const S2 chart(1.0);
-  S2::Point qc(2);
-  qc << 1.0, 0.3;
-  S2::Ambient centre(3);
-  chart.embed(qc, centre);
-  // V = k/2 |x - c|^2 = k (1 - cos a) at angle a from the centre (R = 1).
-  const sesi::System sys(chart, std::vector<double>{1.0}, Trap<S2>{well_k, centre});
-  const Samples s = sample(sys, qc, centre, well_kT, well_gamma, well_dt, well_burn, well_stride, well_samples, 2025);
-  const double bk = well_k / well_kT;
-  const auto density = [&](double a) { return std::sin(a) * std::exp(-bk * (1 - std::cos(a))); };
-  const QuadratureCdf cdf(density, std::numbers::pi, 200000);
-  // The quadrature against the closed form (1 - e^{-bk (1 - cos a)}) / (1 - e^{-2 bk}).
-  const auto exact = [&](double a) { return -std::expm1(-bk * (1 - std::cos(a))) / -std::expm1(-2 * bk); };
-  for (double a = 0; a < 1.5; a += 0.01) REQUIRE(std::abs(cdf(a) - exact(a)) < 1e-8);
-  check_ks("S^2 angle to the centre", s.distance, [&](double a) { return cdf(a); });
-  check_ks("S^2 2K/kT", s.two_k, chi2_2_cdf);
+TEST_CASE("thermostat: the program's engine (runtime table, re-charting) steps as the fixed table") {
+  // Composition<Runtime, ...>::of<Strang>(stage) runs the same operations as the fixed table, and
+  // Recharting<...> re-charts after each step: on S^2 and H^2 (trap and pair term), 300 steps.
+  const auto check = [](const auto& sys) {
+    using Chart = typename std::remove_cvref_t<decltype(sys)>::Chart;
+    using Runtime = sesi::Composition<sesi::coefficients::Runtime, Chart, sesi::Splitting::kick_drift_kick,
+                                      sesi::Thermostat<Chart>>;
+    for (const auto kind : all_kinds) {
+      CAPTURE(static_cast<int>(kind));
+      sesi::Recharting<sesi::Thermostatted<Chart>> fixed(sesi::RechartPolicy<double>{},
+                                                          sesi::Thermostat<Chart>(params(kind)));
+      sesi::Recharting<Runtime> runtime(sesi::RechartPolicy<double>{},
+                                        Runtime::template of<sesi::coefficients::Strang>(sesi::Thermostat<Chart>(params(kind))));
+      auto a = initial_state(sys), b = a;
+      for (int k = 0; k < 300; ++k) {
+        fixed.do_step(sys, a, k * 0.01, 0.01);
+        runtime.do_step(sys, b, k * 0.01, 0.01);
+      }
+      CHECK(a.q == b.q);
+      CHECK(a.p == b.p);
+      CHECK(a.q.array().isFinite().all());
+      CHECK(fixed.stage().heat() == runtime.stage().heat());
+    }
+  };
+  check(make_scene<S2>());
+  check(make_scene<H2>());
 }
 
-TEST_CASE("langevin: one body in a central harmonic well on H^2 samples sinh(r) exp(-V/kT) and chi-squared(2)") {
-  const H2 chart(1.0);
-  H2::Point qc(2);
-  qc << 1.5, 0.4;
-  H2::Ambient centre(3);
-  chart.embed(qc, centre);
-  const sesi::System sys(chart, std::vector<double>{1.0}, HyperbolicWell{well_k, centre});
-  const Samples s = sample(sys, qc, centre, well_kT, well_gamma, well_dt, well_burn, well_stride, well_samples, 2025);
-  const double bk = well_k / well_kT;
-  // Density sinh(r) exp(-k r^2 / 2kT) on [0, 3] (beyond 3 it is below e^-170).
-  const QuadratureCdf cdf([&](double r) { return std::sinh(r) * std::exp(-bk * r * r / 2); }, 3.0, 300000);
-  check_ks("H^2 distance to the centre", s.distance, [&](double r) { return cdf(r); });
-  check_ks("H^2 2K/kT", s.two_k, chi2_2_cdf);
+TEST_CASE("thermostat: bad parameters and a table of several stages are refused") {
+  using Kind = sesi::ThermostatKind;
+  auto p = params(Kind::langevin);
+  p.kT = -1;
+  CHECK_THROWS_AS(sesi::Thermostat<S2>{p}, coretest::CheckFailure);
+  p = params(Kind::langevin);
+  p.gamma = -1;
+  CHECK_THROWS_AS(sesi::Thermostat<S2>{p}, coretest::CheckFailure);
+  p = params(Kind::brownian);
+  p.gamma = 0;
+  CHECK_THROWS_AS(sesi::Thermostat<S2>{p}, coretest::CheckFailure);
+  p = params(Kind::nose_hoover);
+  p.tau = 0;
+  CHECK_THROWS_AS(sesi::Thermostat<S2>{p}, coretest::CheckFailure);
+  p = params(Kind::nose_hoover);
+  p.chain = 0;
+  CHECK_THROWS_AS(sesi::Thermostat<S2>{p}, coretest::CheckFailure);
+  p = params(Kind::csvr);
+  p.tau = -1;
+  CHECK_THROWS_AS(sesi::Thermostat<S2>{p}, coretest::CheckFailure);
+  sesi::Thermostat<S2> t(params(Kind::langevin));
+  CHECK_THROWS_AS(t.set_temperature(-0.5), coretest::CheckFailure);
+  t.set_temperature(2.5);
+  CHECK(t.params().kT == 2.5);
+  using Engine = sesi::Composition<sesi::coefficients::Runtime, S2, sesi::Splitting::kick_drift_kick, sesi::Thermostat<S2>>;
+  CHECK_THROWS_AS(Engine::of<sesi::coefficients::Yoshida4>(sesi::Thermostat<S2>(params(Kind::langevin))),
+                  coretest::CheckFailure);
 }
 
 }  // namespace
+

@@ -1,0 +1,177 @@
+#pragma once
+/// @file analysis.hpp
+/// Observables of a run with the space's own geometry (docs/observables.md): the radial
+/// distribution function g(r) in geodesic distance, normalised by the exact shell measure; the
+/// mean-squared geodesic displacement over time origins; the velocity autocorrelation with
+/// parallel transport; per-body averages. They work on frames of embedding points (and
+/// velocities), read from a run's outputs by read_run (trajectory.csv or trajectory.h5) or
+/// handed in from Python: one library behind `sesi analyze` and `sesi.analysis`.
+
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "scene.hpp"
+
+namespace sesi::analysis {
+
+using program::SpaceKind;
+using program::SpaceSpec;
+
+// ---- the space's measure ---------------------------------------------------------------------
+
+/// Omega_{k}: the area of the unit k-sphere S^k in R^{k+1}, 2 pi^{(k+1)/2} / Gamma((k+1)/2).
+double unit_sphere_area(int k);
+
+/// The volume of the shell of geodesic radii [a, b] about a point:
+/// Omega_{n-1} int_a^b s_R(s)^{n-1} ds, with s_R(s) = R sin(s/R) on S^n, R sinh(s/R) on H^n and
+/// s on E^n; exact in closed form on E^n, else by 8-point Gauss-Legendre quadrature on pieces of
+/// width <= R / (4 max(1, n - 1)) (error below 1e-16 relative: see shell_volume in analysis.cpp).
+/// On S^n, radii beyond pi R hold nothing.
+double shell_volume(const SpaceSpec& space, double a, double b);
+
+/// S^n: the whole sphere's volume Omega_n R^n; H^n and E^n: the geodesic ball of radius D.
+double total_volume(const SpaceSpec& space, double ball_radius = 0.0);
+
+/// S^n: the mean squared geodesic distance of two independent uniform points, where the MSD of
+/// a body that forgets its start saturates: R^2 (pi^2/2 - 2) on S^2, R^2 (pi^2/3 - 1/2) on S^3.
+/// NaN on H^n and E^n (no saturation).
+double msd_saturation(const SpaceSpec& space);
+
+/// Geodesic distance of two embedding points (H^n: by radii and directions, accurate far out).
+double distance(const SpaceSpec& space, const Eigen::Ref<const Eigen::VectorXd>& x,
+                const Eigen::Ref<const Eigen::VectorXd>& y);
+
+/// <P v, w>: the tangent vector v at x carried to y by parallel transport along the geodesic,
+/// paired with the tangent vector w at y in the space's metric (S^n, H^n: docs/observables.md;
+/// E^n: v . w). S^n: NaN at exactly antipodal points, where no geodesic is unique.
+double transported_dot(const SpaceSpec& space, const Eigen::Ref<const Eigen::VectorXd>& x,
+                       const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& y,
+                       const Eigen::Ref<const Eigen::VectorXd>& w);
+
+// ---- g(r) --------------------------------------------------------------------------------------
+
+/// The region over which a frame's number density is taken on H^n and E^n: the geodesic ball
+/// B(center, radius). Only bodies at least r_max inside it are centres of shells (their whole
+/// shell lies in the region), and the others are counted around them at density
+/// (N - 1) / volume(B).
+struct Region {
+  Eigen::VectorXd center;
+  double radius = 0.0;
+};
+
+/// The default region of a frame on H^n and E^n: about the bodies' centre (E^n: their mean;
+/// H^n: their Minkowski sum scaled back onto the hyperboloid), of the radius that holds every
+/// body.
+Region bounding_region(const SpaceSpec& space, const Eigen::MatrixXd& X);
+
+/// The default largest distance of g(r): pi R on S^n (the whole sphere); on H^n and E^n a
+/// quarter of the radius of the first frame's bounding_region, so that the bodies within its
+/// inner three quarters are shell centres; in both at most ten mean spacings (V/N)^{1/n} (V the
+/// sphere's or the region's volume), so that many bodies still cost O(N) per frame.
+double default_rdf_max(const SpaceSpec& space, const Eigen::MatrixXd& first_frame);
+
+/// g(r) accumulated over frames (freud's RDF shape): bins of equal width over [0, r_max).
+class Rdf {
+ public:
+  /// @throws InputError when r_max is not in (0, pi R] on S^n or (0, inf) elsewhere, or bins < 1
+  Rdf(SpaceSpec space, double r_max, int bins);
+
+  /// Adds one frame (columns: embedding points) through the neighbour index (O(N) for a fixed
+  /// r_max and density). region: H^n and E^n only (default: bounding_region); ignored on S^n.
+  void accumulate(const Eigen::MatrixXd& X, const std::optional<Region>& region = std::nullopt);
+  /// The same counts from all pairs, O(N^2): the reference of the tests.
+  void accumulate_all_pairs(const Eigen::MatrixXd& X, const std::optional<Region>& region = std::nullopt);
+
+  int bins() const { return bins_; }
+  double r_max() const { return r_max_; }
+  long frames() const { return frames_; }
+  /// Bin edges (bins + 1) and centres.
+  std::vector<double> edges() const;
+  std::vector<double> centers() const;
+  /// Ordered pairs (centre i, other j) with d(x_i, x_j) in each bin, over all frames.
+  const std::vector<std::int64_t>& counts() const { return counts_; }
+  /// The counts an ideal gas would give: sum over frames of centres x (N - 1) x shell / volume.
+  const std::vector<double>& expected() const { return expected_; }
+  /// counts / expected (NaN where expected is 0).
+  std::vector<double> g() const;
+  /// Shell centres counted over all frames.
+  long centres() const { return centres_; }
+
+ private:
+  struct Frame;
+  Frame prepare(const Eigen::MatrixXd& X, const std::optional<Region>& region) const;
+  void add(double d);
+
+  SpaceSpec space_;
+  double r_max_ = 0.0;
+  int bins_ = 0;
+  long frames_ = 0, centres_ = 0;
+  std::vector<double> shell_;  ///< per bin, the exact shell volume
+  std::vector<std::int64_t> counts_;
+  std::vector<double> expected_;
+};
+
+// ---- dynamics ----------------------------------------------------------------------------------
+
+/// Frames of a run: their times, embedding points (ambient x bodies) and, when the masses are
+/// known, embedding velocities.
+struct Frames {
+  SpaceSpec space;
+  std::vector<double> t;
+  std::vector<Eigen::MatrixXd> x;
+  std::vector<Eigen::MatrixXd> v;  ///< empty when the velocities are unknown
+  std::vector<double> masses;      ///< empty when unknown
+  int bodies() const { return x.empty() ? 0 : static_cast<int>(x.front().cols()); }
+};
+
+/// A time correlation over lags 0..max_lag frames, averaged over all time origins and bodies.
+struct Correlation {
+  std::vector<double> lag_time;  ///< t[k] - t[0] of lag k (the frames are evenly spaced)
+  std::vector<double> value;     ///< the mean over origins and bodies
+  std::vector<long> samples;     ///< (origin, body) pairs averaged at each lag
+  /// Per body: the mean over origins at the largest lag (the MSD's per-body value there).
+  std::vector<double> per_body_last;
+};
+
+/// Mean-squared geodesic displacement <d(x_b(t0), x_b(t0 + lag))^2> over every time origin t0
+/// and body b. max_lag < 0: half the frames.
+Correlation msd(const Frames& frames, long max_lag = -1);
+/// Velocity autocorrelation <P v_b(t0), v_b(t0 + lag)> (transported_dot) over every time origin
+/// and body; at lag 0, the mean squared speed (2K / m per body). Needs frames.v.
+Correlation vacf(const Frames& frames, long max_lag = -1);
+
+// ---- reading a run -------------------------------------------------------------------------------
+
+struct ReadOptions {
+  double from = -std::numeric_limits<double>::infinity();  ///< first time read (t >= from)
+  double to = std::numeric_limits<double>::infinity();     ///< last time read (t <= to)
+  long every = 1;                                          ///< every k-th frame of those
+  bool velocities = true;                                  ///< read p and the masses for v
+};
+
+/// What summary.json says of a finished run (the space, the trajectory file, the masses).
+struct RunInfo {
+  SpaceSpec space;
+  std::string trajectory;  ///< "trajectory.csv" or "trajectory.h5"
+  std::vector<double> masses;
+  long bodies = 0;
+};
+
+/// Reads dir/summary.json; throws InputError naming dir when it is missing, not sesi's, or says
+/// the run is unfinished ("complete": false).
+RunInfo read_run_info(const std::filesystem::path& dir);
+
+/// The frames of dir's trajectory (trajectory.csv, or trajectory.h5 in a build with HDF5)
+/// between from and to: embedding points as written; velocities from the chart coordinates and
+/// momenta through the chart's velocity map, when the masses are known (summary.json, or
+/// H5MD's particles/all/mass). Frames off the even time grid (a run's last row at a t_end off
+/// it) are left out. Throws InputError with one line naming the file.
+Frames read_frames(const std::filesystem::path& dir, const RunInfo& info, const ReadOptions& options);
+
+}  // namespace sesi::analysis
