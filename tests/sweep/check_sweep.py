@@ -239,6 +239,38 @@ values = [100.0, 1e-12, 100.0]
 
 
 @case
+def sweep_mpi_thermostat(ctx):
+    """A thermostatted sweep (issue #25): the noise is keyed by the run's seed and step, never by the
+    rank, so 1 and 2 ranks write the same files, each as sesi run writes it."""
+    if not ctx.mpiexec:
+        raise Skip("sesi is built without MPI (SESI_BUILD_MPI, libopenmpi-dev)")
+    text = ctx.scene("sphere-two-body-xv.toml", t_end=0.3).read_text().replace('method = "sesi4"', 'method = "sesi2"')
+    ctx.write("thermostat-scene.toml", text + """
+[thermostat]
+kind = "langevin"
+temperature = 0.5
+gamma = 2.0
+seed = 11
+""")
+    sweep = ctx.write("thermostat-sweep.toml", """scene = "thermostat-scene.toml"
+
+[[vary]]
+key = "thermostat.seed"
+values = [1, 2, 3]
+""")
+    trees = []
+    for ranks in (1, 2):
+        out = ctx.work / f"out-thermostat-np{ranks}"
+        expect_status(ctx.run("sweep", sweep, "--out", out, ranks=ranks), 0, f"mpiexec -np {ranks} sesi sweep")
+        trees.append(file_tree(out))
+        if ranks == 2:
+            expect_same_as_sesi_run(ctx, out)
+    check(trees[0] == trees[1], "a thermostatted sweep's outputs depend on the number of ranks")
+    noise = {data for name, data in trees[0][0].items() if name.endswith("diagnostics.csv")}
+    check(len(noise) == 3, "the three thermostat seeds gave fewer than three different runs")
+
+
+@case
 def sweep_perturb(ctx):
     """Perturbations: the documented generator, reproducible from the seed, kept on the space."""
     sweep = two_body_sweep(ctx)
