@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -113,9 +114,21 @@ std::optional<double> json_number(std::string_view text, std::string_view key) {
   return value;
 }
 
-/// Energy errors from summary.json: E_final - E0, max |E - E0|, its relative form.
+/// Energy errors from summary.json: E_final - E0, max |E - E0|, its relative form. A thermostatted
+/// run's energy changes by the heat on purpose: its errors are those of the quantity its energy
+/// guard judges, thermostat.conserved (E + the thermostat's offset; null, so empty, for brownian).
 void read_energy(const fs::path& summary, RunResult& result) {
   const std::string text = read_file(summary);
+  if (const std::size_t c = text.find("\"conserved\""); c != std::string::npos) {
+    const std::size_t end = text.find('}', c);
+    const std::string_view conserved = std::string_view(text).substr(c, end == std::string::npos ? end : end - c);
+    const auto initial = json_number(conserved, "initial"), final = json_number(conserved, "final");
+    const auto drift = json_number(conserved, "max_abs_drift");
+    if (initial && final) result.final_energy_error = format_number(*final - *initial);
+    if (drift) result.max_energy_error = format_number(*drift);
+    if (initial && drift && *initial != 0.0) result.max_rel_energy_error = format_number(*drift / std::abs(*initial));
+    return;
+  }
   const std::size_t at = text.find("\"energy\"");
   if (at == std::string::npos) return;
   const std::size_t end = text.find('}', at);

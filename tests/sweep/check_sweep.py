@@ -268,6 +268,14 @@ values = [1, 2, 3]
     check(trees[0] == trees[1], "a thermostatted sweep's outputs depend on the number of ranks")
     noise = {data for name, data in trees[0][0].items() if name.endswith("diagnostics.csv")}
     check(len(noise) == 3, "the three thermostat seeds gave fewer than three different runs")
+    # sweep.csv's energy-error columns are those of the conserved quantity the guard judges, not of
+    # the energy, which changes by the heat on purpose.
+    out = ctx.work / "out-thermostat-np1"
+    for row, run in zip(rows(out), run_dirs(out)):
+        conserved = json.loads((run / "summary.json").read_text())["thermostat"]["conserved"]
+        check(float(row["max_energy_error"]) == conserved["max_abs_drift"] and
+              float(row["final_energy_error"]) == conserved["final"] - conserved["initial"],
+              f"{run.name}: sweep.csv's energy errors {row} are not the conserved quantity's {conserved}")
 
 
 @case
