@@ -19,6 +19,7 @@
 #include <doctest/doctest.h>
 
 #include "common.hpp"
+#include "thermostat_common.hpp"
 
 #include <sesi/random.hpp>
 #include <sesi/recharting.hpp>
@@ -65,26 +66,7 @@ double gamma_p(double a, double x) {
   return 1 - front * h;
 }
 
-/// The Kolmogorov-Smirnov statistic sup |F_N - F| of the sample against the CDF F.
-double ks_statistic(std::vector<double> x, const std::function<double(double)>& cdf) {
-  std::sort(x.begin(), x.end());
-  const double n = static_cast<double>(x.size());
-  double d = 0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double f = cdf(x[i]);
-    d = std::max({d, (static_cast<double>(i) + 1) / n - f, f - static_cast<double>(i) / n});
-  }
-  return d;
-}
-
-/// The 1 % critical value of the KS statistic for N independent samples (asymptotic: 1.628 / sqrt(N)).
-double ks_critical(std::size_t n) { return 1.63 / std::sqrt(static_cast<double>(n)); }
-
-void check_ks(const std::string& what, const std::vector<double>& x, const std::function<double(double)>& cdf) {
-  const double d = ks_statistic(x, cdf), crit = ks_critical(x.size());
-  MESSAGE(what, ": KS statistic ", d, " against the 1 % critical value ", crit, " (N = ", x.size(), ")");
-  CHECK(d < crit);
-}
+using thermotest::check_ks;  // tests/core/thermostat_common.hpp
 
 TEST_CASE("test helper: the incomplete gamma function against closed forms") {
   // P(1, x) = 1 - e^-x, P(1/2, x) = erf(sqrt x), P(2, x) = 1 - (1 + x) e^-x.
