@@ -140,7 +140,15 @@ def second_signal_stops_at_once(ctx):
     out = ctx.work / "out"
     process = subprocess.Popen([ctx.sesi, "run", str(scene), "--out", str(out), "--quiet"], cwd=ctx.work,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
-    time.sleep(1.5)  # reading 4000 bodies takes a fraction of that: the run has started
+    # The run has started once its staging directory (.out.sesi-XXXXXX) exists: it is made just after
+    # the scene is read. Reading takes a fraction of a second on a quiet machine, but seconds under
+    # the sanitizers beside a test that keeps every core busy, so wait for it rather than a fixed time.
+    deadline = time.monotonic() + 100
+    while not any(p.name.startswith(".out.sesi-") for p in ctx.work.iterdir()):
+        check(process.poll() is None and time.monotonic() < deadline,
+              f"the run did not start (exit status {process.poll()})")
+        time.sleep(0.02)
+    time.sleep(0.2)  # past the first forces and outputs, into a step (a second or more)
     process.send_signal(signal.SIGINT)
     time.sleep(0.05)  # two signals sent together may arrive as one
     process.send_signal(signal.SIGINT)
