@@ -10,10 +10,12 @@ JOBS        ?= $(shell nproc)
 # libopenmpi-dev and openmpi-bin `sesi sweep` across MPI ranks (its tests run mpirun with 1-3 ranks).
 # librandom123-dev the counter-based random numbers of the Langevin thermostat (header-only; the core
 # library needs Eigen alone, sesi/thermostat.hpp adds Random123).
+# lammps (run as the program `lmp`, never linked) the flat-space peer: tests/lammps compares forces and
+# NVE energy traces of periodic Lennard-Jones boxes with it, and `sesi bench --scaling` times it.
 APT_PACKAGES := cmake g++ make libeigen3-dev libboost-dev doctest-dev libtomlplusplus-dev \
                 libcli11-dev python3-matplotlib clang libclang-rt-14-dev libbenchmark-dev \
                 libhdf5-dev python3-h5py python3-dev python3-numpy pybind11-dev python3-pytest \
-                libopenmpi-dev openmpi-bin librandom123-dev
+                libopenmpi-dev openmpi-bin librandom123-dev lammps
 
 .PHONY: deps configure build test demo clean fuzz figures microbench sweep-example
 
@@ -110,6 +112,8 @@ figures: deps
 	@# thermostat, g(r) at three temperatures (sesi analyze; docs/observables.md).
 	$(PYTHON3) tools/lj_quench.py --sesi $(BENCH_DIR)/src/sesi --out $(BENCH_OUT)/lj-quench \
 	  --figure docs/figures/lj-quench-g-r.png | tee $(BENCH_OUT)/lj-quench-report.txt
+	@# Topologies (issue #26): the Bolza surface's octagon with the liquid of examples/scenes/bulk-lj-bolza.toml.
+	$(PYTHON3) tools/topology_figure.py figure docs/figures/topology-bolza.png --sesi $(BENCH_DIR)/src/sesi --work $(BENCH_OUT)/topology-bolza
 	@# Sweeps (issue #16): the chaos map of docs/sweeps.md.
 	$(MAKE) --no-print-directory sweep-example RELEASE_DIR=$(BENCH_DIR)
 

@@ -243,6 +243,28 @@ PYBIND11_MODULE(_sesi, m) {
       .def_property_readonly("dim", [](const Simulation& s) { return s.scene().dim(); })
       .def_property_readonly("space", [](const Simulation& s) { return std::string(sesi::program::space_name(s.scene().space.kind)); })
       .def_property_readonly("radius", [](const Simulation& s) { return s.scene().space.radius; })
+      // A topology (docs/scene-format.md, [space]): the box's edges, the surface's genus, else None.
+      .def_property_readonly("box", [](const Simulation& s) -> py::object {
+        if (s.scene().space.box.empty()) return py::none();
+        return py::cast(s.scene().space.box);
+      })
+      .def_property_readonly("genus", [](const Simulation& s) -> py::object {
+        if (s.scene().space.genus == 0) return py::none();
+        return py::int_(s.scene().space.genus);
+      })
+      .def_property_readonly("max_cutoff", [](const Simulation& s) -> py::object {
+        if (!s.scene().space.has_topology()) return py::none();
+        return py::float_(sesi::program::max_cutoff(s.scene().space));
+      })
+      .def_property_readonly("image_counts", [](const Simulation& s) -> py::object {
+        if (s.scene().space.box.empty()) return py::none();
+        return py::cast(s.image_counts());
+      })
+      .def_property_readonly("words", [](const Simulation& s) -> py::object {
+        if (s.scene().space.genus == 0) return py::none();
+        return py::cast(s.words());
+      })
+      .def_property_readonly("unwrapped_points", &Simulation::unwrapped_points)
       .def_property_readonly("name", [](const Simulation& s) { return s.scene().name; })
       .def_property_readonly("method", [](const Simulation& s) { return s.scene().integrator.method; })
       // method = "auto": why it picked `method` and `dt` (None for a named method).
@@ -307,6 +329,19 @@ PYBIND11_MODULE(_sesi, m) {
           for (Eigen::Index c = 0; c < components; ++c) view(static_cast<py::ssize_t>(r), c) = rows.momentum[r](c);
         }
         out["momentum"] = momentum;
+        if (s.scene().space.has_topology()) out["unwrapped_points"] = stack(rows.unwrapped, n, ambient);
+        if (!s.scene().space.box.empty()) {
+          py::array_t<std::int64_t> counts({static_cast<py::ssize_t>(rows.image_counts.size()),
+                                            static_cast<py::ssize_t>(n), static_cast<py::ssize_t>(dim)});
+          auto c = counts.mutable_unchecked<3>();
+          for (std::size_t r = 0; r < rows.image_counts.size(); ++r) {
+            for (Eigen::Index b = 0; b < n; ++b) {
+              for (Eigen::Index k = 0; k < dim; ++k) c(static_cast<py::ssize_t>(r), b, k) = rows.image_counts[r](b, k);
+            }
+          }
+          out["image_counts"] = counts;
+        }
+        if (s.scene().space.genus != 0) out["words"] = py::cast(rows.words);
         return py::make_tuple(report, out);
       });
 }

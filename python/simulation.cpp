@@ -51,9 +51,32 @@ void PythonFunctions::gradient(const Eigen::VectorXd& x, double m, Eigen::Vector
 
 namespace {
 
+/// A topology's columns of a row (Rows::unwrapped, image_counts, words), from the run's snapshot
+/// (its image record, filled by the run loop; trajectory.csv's numbers).
+void topology_row(const program::Scene& scene, const program::Snapshot& s, Rows& rows) {
+  if (!scene.space.has_topology()) return;
+  if (!scene.space.box.empty()) {
+    rows.image_counts.push_back(s.image_counts.transpose());
+    // Unwrapped x + L .* n: exact in the counts (Integrator::unwrapped_points, the same arithmetic).
+    Eigen::MatrixXd u = s.x;
+    for (Eigen::Index b = 0; b < u.cols(); ++b) {
+      for (Eigen::Index k = 0; k < u.rows(); ++k) {
+        u(k, b) += scene.space.box[static_cast<std::size_t>(k)] * static_cast<double>(s.image_counts(k, b));
+      }
+    }
+    rows.unwrapped.push_back(u.transpose());
+  } else {
+    rows.unwrapped.push_back(s.unwrapped.transpose());
+    std::vector<std::string> words;
+    for (const auto& w : s.words) words.push_back(program::word_text(w));
+    rows.words.push_back(std::move(words));
+  }
+}
+
 class ArraySink final : public program::RunSink {
  public:
-  ArraySink(program::Integrator& integrator, Rows* rows) : integrator_(integrator), rows_(rows) {
+  ArraySink(const program::Scene& scene, program::Integrator& integrator, Rows* rows)
+      : scene_(scene), integrator_(integrator), rows_(rows) {
     good_ = integrator.framed_state();
   }
   void track(double, const Eigen::VectorXd&) override { good_ = integrator_.framed_state(); }
@@ -66,6 +89,7 @@ class ArraySink final : public program::RunSink {
     rows_->x.push_back(s.x.transpose());
     rows_->v.push_back(s.v.transpose());
     rows_->momentum.push_back(s.momentum);
+    topology_row(scene_, s, *rows_);
   }
   void set_final(program::Snapshot last) override { final_ = std::move(last); }
 
@@ -73,6 +97,7 @@ class ArraySink final : public program::RunSink {
   const program::Snapshot& final() const { return final_; }
 
  private:
+  const program::Scene& scene_;
   program::Integrator& integrator_;
   Rows* rows_;
   program::FramedState good_;
@@ -91,6 +116,11 @@ Simulation::Simulation(const toml::table& doc, const std::string& source,
   for (auto& f : functions) {
     scene_.potentials.emplace_back(program::FunctionExternalSpec{std::move(f)});
     has_functions_ = true;
+    // An external term on a box or a surface: refused as a scene's (numbered after its tables).
+    const std::string term = "potential[" + std::to_string(scene_.potentials.size()) + "].";
+    program::check_topology_potential(scene_.potentials.back(), scene_.space, [&](std::string_view key) {
+      return std::pair{Origin{source}, term + std::string(key)};
+    });
   }
   program::resolve_auto(scene_);  // method = "auto": pilot runs, then the method and step
   rebuild();
@@ -127,6 +157,13 @@ Eigen::VectorXd Simulation::masses() const {
   for (int b = 0; b < scene_.body_count(); ++b) m(b) = scene_.bodies[static_cast<std::size_t>(b)].mass;
   return m;
 }
+ImageCounts Simulation::image_counts() const { return integrator_->image_counts().transpose(); }
+std::vector<std::string> Simulation::words() const {
+  std::vector<std::string> out;
+  for (const auto& w : integrator_->words()) out.push_back(program::word_text(w));
+  return out;
+}
+Eigen::MatrixXd Simulation::unwrapped_points() const { return integrator_->unwrapped_points().transpose(); }
 double Simulation::energy() const { return integrator_->energy(); }
 Eigen::VectorXd Simulation::momentum_map() const { return integrator_->momentum_map(); }
 std::vector<std::string> Simulation::momentum_names() const {
@@ -146,6 +183,7 @@ void Simulation::set_method(const std::string& method) {
   scene_.integrator.method = method;
   try {
     program::check_thermostat_method(scene_, option, "method");  // a thermostat: sesi2 only
+    program::check_topology_method(scene_, option, "method");    // a topology: chart compositions
     rebuild();  // refuses a geodesic method on E^n
   } catch (...) {
     scene_.integrator.method = before;
@@ -194,6 +232,11 @@ void Simulation::first_row(Rows& rows) const {
   s.v = integrator_->velocities();
   s.energy = integrator_->energy();
   s.momentum = integrator_->momentum_map();
+  if (!scene_.space.box.empty()) s.image_counts = integrator_->image_counts();
+  if (scene_.space.genus != 0) {
+    s.words = integrator_->words();
+    s.unwrapped = integrator_->unwrapped_points();
+  }
   rows.t.push_back(s.t);
   rows.energy.push_back(s.energy);
   rows.q.push_back(s.q.transpose());
@@ -201,6 +244,7 @@ void Simulation::first_row(Rows& rows) const {
   rows.x.push_back(s.x.transpose());
   rows.v.push_back(s.v.transpose());
   rows.momentum.push_back(s.momentum);
+  topology_row(scene_, s, rows);
 }
 
 Report Simulation::advance(double target, long output_every, Rows* rows) {
@@ -229,7 +273,7 @@ Report Simulation::advance(double target, long output_every, Rows* rows) {
   // back through the loop (never out of a parallel region).
   sesi::parallel::set_threads(has_functions_ ? 1 : scene_.integrator.threads);
   const program::FramedState before = integrator_->framed_state();
-  ArraySink sink(*integrator_, rows);
+  ArraySink sink(scene_, *integrator_, rows);
   std::atomic<bool> stop{false};
   bool interrupted = false;
   auto last_poll = std::chrono::steady_clock::now();

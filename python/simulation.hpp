@@ -5,6 +5,7 @@
 /// runs of the program's step loop (run_loop), whose rows are kept in memory. The Python layer
 /// (sesi/__init__.py) builds the document and turns a run's report into exceptions.
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,11 +36,18 @@ class PythonFunctions final : public program::FunctionExternalSpec::Functions {
   py::function value_, gradient_;
 };
 
+/// Integer image counts, bodies x dim (a periodic box's record, transposed).
+using ImageCounts = Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic>;
+
 /// The rows of a run (Simulation.run), one per output row, bodies along the second axis.
 struct Rows {
   std::vector<double> t, energy;
   std::vector<Eigen::MatrixXd> x, v, q, p;  ///< bodies x coordinates each
   std::vector<Eigen::VectorXd> momentum;
+  // A space with a topology (SpaceSpec::has_topology) only, as trajectory.csv's columns:
+  std::vector<Eigen::MatrixXd> unwrapped;          ///< bodies x ambient: the points in the covering space
+  std::vector<ImageCounts> image_counts;           ///< a box: bodies x dim
+  std::vector<std::vector<std::string>> words;     ///< a surface: per body, its word's text (program::word_text)
 };
 
 /// How a run ended (program::RunOutcome, for the Python layer).
@@ -73,6 +81,12 @@ class Simulation {
   Eigen::MatrixXd x() const;
   Eigen::MatrixXd v() const;
   Eigen::VectorXd masses() const;
+  /// A space with a topology: the image record and the unwrapped points (bodies along the rows);
+  /// q(), x() are the bodies in the domain. Without a box / a surface, image_counts() / words()
+  /// are empty; without a topology unwrapped_points() is x().
+  ImageCounts image_counts() const;
+  std::vector<std::string> words() const;
+  Eigen::MatrixXd unwrapped_points() const;
   double energy() const;
   Eigen::VectorXd momentum_map() const;
   std::vector<std::string> momentum_names() const;

@@ -20,10 +20,12 @@ def read_columns(path):
     with open(path, newline="") as f:
         rows = csv.reader(f)
         header = next(rows)
-        columns = {name: [] for name in header}
+        # (A surface run's b<k>_word columns are text, not numbers: not drawn.)
+        columns = {name: [] for name in header if not name.endswith("_word")}
         for row in rows:
             for name, value in zip(header, row):
-                columns[name].append(float(value))
+                if name in columns:
+                    columns[name].append(float(value))
     return columns
 
 

@@ -19,6 +19,7 @@
 #include "sesi/chart.hpp"
 #include "sesi/state.hpp"
 #include "sesi/stepper.hpp"
+#include "sesi/topology.hpp"
 
 namespace sesi {
 
@@ -65,9 +66,10 @@ struct Recharted {
   int total() const { return turned + homed; }
 };
 
-/// Charts that can move a cluster frame (H^n): the standard boost to a point.
+/// Charts that can move a cluster frame (H^n): the standard boost to a point. Not a quotient
+/// (topology.hpp): its bodies are kept in the fundamental domain instead.
 template <class C>
-concept ClusterChart = EmbeddedChart<C> && requires(const C& c, const typename C::Ambient& y,
+concept ClusterChart = EmbeddedChart<C> && !HasTopology<C> && requires(const C& c, const typename C::Ambient& y,
                                                     typename State<C>::Frame& b) {
   c.boost_to(y, b);
 };

@@ -18,3 +18,6 @@
 #include "sesi/stepper.hpp"
 #include "sesi/system.hpp"
 #include "sesi/recharting.hpp"
+#include "sesi/topologies/hyperbolic_surface.hpp"
+#include "sesi/topologies/periodic_box.hpp"
+#include "sesi/topology.hpp"

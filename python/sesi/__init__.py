@@ -147,10 +147,15 @@ class Simulation:
     (method, dt, energy_guard, threads, check_every) and the thermostat may change between runs.
     """
 
-    def __init__(self, space="sphere", dim=2, radius=None, name=None):
+    def __init__(self, space="sphere", dim=2, radius=None, name=None, box=None, genus=None):
         doc = {"space": {"kind": space, "dim": dim}}
         if radius is not None:
             doc["space"]["radius"] = radius
+        # A topology: a periodic box on E^n, a compact surface of genus g on H^2 (the [space] keys).
+        if box is not None:
+            doc["space"]["box"] = box
+        if genus is not None:
+            doc["space"]["genus"] = genus
         if name is not None:
             doc["name"] = name
         self._init(doc, "<simulation>")
@@ -312,6 +317,25 @@ class Simulation:
     dim = property(lambda self: self._start().dim, doc="The dimension n of the space.")
     space = property(lambda self: self._start().space, doc="sphere, hyperbolic or euclidean.")
     radius = property(lambda self: self._start().radius, doc="R (1 on euclidean).")
+    box = property(lambda self: self._start().box,
+                   doc="The periodic box's edges [L1, ..., Ln] on E^n (domain [0, L_k) per axis), or None.")
+    genus = property(lambda self: self._start().genus,
+                     doc="The genus g of the compact hyperbolic surface H^2/Gamma, or None.")
+    max_cutoff = property(lambda self: self._start().max_cutoff,
+                          doc="The largest pair cutoff the box or surface allows (half the shortest edge; the "
+                              "surface's injectivity radius), or None without a topology.")
+    image_counts = property(lambda self: self._start().image_counts,
+                            doc="In a periodic box: each body's integer image counts n_b, an int64 array of shape "
+                                "(bodies, n); the body went to x_b + L * n_b (sim.unwrapped_points). None without a box.")
+    words = property(lambda self: self._start().words,
+                     doc="On a compact surface: each body's group word W_b as text, the 1-based side numbers "
+                         "joined by '.' (\"e\" for the identity), as trajectory.csv's b{k}_word; the body went "
+                         "to W_b x_b (sim.unwrapped_points). None without a surface.")
+    unwrapped_points = property(lambda self: self._start().unwrapped_points,
+                                doc="Where the bodies went in the covering space (E^n, H^2), one row per body: "
+                                    "x_b + L * n_b in a box, W_b x_b on a surface (for the MSD); sim.x without a "
+                                    "topology. sim.x and sim.q are the bodies in the domain (or past a side by less than "
+                                    "the wrap margin, a quarter of the cutoff).")
     momentum_names = property(lambda self: self._start().momentum_names,
                               doc="Names of the momentum map's components (diagnostics.csv's).")
 
@@ -340,7 +364,9 @@ class Simulation:
         """Advance to t_end as integrate(), and return the rows: every output_every steps of the
         simulation's step count, the current state first and the last state: a dict of NumPy
         arrays t (rows), x, v (rows x bodies x ambient), q, p (rows x bodies x n), energy (rows)
-        and momentum (rows x components, named by momentum_names)."""
+        and momentum (rows x components, named by momentum_names). With a topology also
+        unwrapped_points (rows x bodies x ambient), and image_counts (rows x bodies x n, int64) in a
+        box or words (a list per row of the bodies' words) on a surface, as trajectory.csv's columns."""
         report, out = self._start().run(float(t_end), int(output_every))
         self._raise(report, out)
         return out
@@ -359,5 +385,7 @@ class Simulation:
         if self._core is None:
             return (f"<sesi.Simulation {self._doc['space'].get('kind')} {self._doc['space'].get('dim')}, "
                     f"{len(self._doc['bodies'])} bodies, not started>")
-        return (f"<sesi.Simulation {self.space} {self.dim}, {self.n_bodies} bodies, t = {self.t:.6g}, "
+        topology = (f", box {self.box}" if self.box is not None else "") + \
+            (f", genus {self.genus}" if self.genus is not None else "")
+        return (f"<sesi.Simulation {self.space} {self.dim}{topology}, {self.n_bodies} bodies, t = {self.t:.6g}, "
                 f"method {self.method}>")

@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
+#include <stdexcept>
 #include <variant>
 
 #include <sesi/neighbours.hpp>
@@ -12,6 +15,8 @@
 #include <sesi/spaces/euclidean.hpp>
 #include <sesi/spaces/hyperbolic.hpp>
 #include <sesi/spaces/sphere.hpp>
+#include <sesi/topologies/hyperbolic_surface.hpp>
+#include <sesi/topologies/periodic_box.hpp>
 
 #include "errors.hpp"
 
@@ -167,6 +172,230 @@ std::string number(double v) { return program::format_number(v); }
 
 }  // namespace
 
+// ---- the space's topology ----------------------------------------------------------------------
+
+/// The library's topology of a quotient space (include/sesi/topologies/): the minimum image, the
+/// reduction into the domain, the ghost images near the domain and the domain's volume. One
+/// place here that asks the library; the observables below go through it.
+class Topology {
+ public:
+  using Box = sesi::PeriodicBox<double, Eigen::Dynamic>;
+  using Surface = sesi::HyperbolicSurface<double>;
+
+  explicit Topology(const SpaceSpec& space) : space_(space) {
+    try {
+      if (!space.box.empty()) {
+        if (space.kind != SpaceKind::euclidean || static_cast<int>(space.box.size()) != space.dim) {
+          throw program::InputError("space.box: expected " + std::to_string(space.dim) +
+                                    " edges of a euclidean space's box");
+        }
+        box_.emplace(Eigen::Map<const Eigen::VectorXd>(space.box.data(), static_cast<Eigen::Index>(space.box.size())));
+      } else if (space.genus != 0) {
+        if (space.kind != SpaceKind::hyperbolic || space.dim != 2) {
+          throw program::InputError("space.genus: a compact surface needs a hyperbolic space of dim 2");
+        }
+        surface_.emplace(space.genus, space.radius);
+      }
+    } catch (const std::invalid_argument& e) {
+      throw program::InputError(std::string("space: ") + e.what());
+    }
+  }
+
+  bool is_box() const { return box_.has_value(); }
+  const Box& box() const { return *box_; }
+  const Surface& surface() const { return *surface_; }
+  double max_cutoff() const { return box_ ? box_->max_cutoff() : surface_->max_cutoff(); }
+
+  /// The domain's volume: L_1 ... L_n; the surface's area 4 pi (g - 1) R^2 (Gauss-Bonnet;
+  /// Sausset and Tarjus, J. Phys. A 40, 12873 (2007)).
+  double volume() const { return box_ ? box_->edges().prod() : surface_->area(); }
+
+  /// x <- its image in the domain (PeriodicBox::reduce, HyperbolicSurface::reduce).
+  void reduce(double* x) const {
+    if (box_) {
+      Eigen::Map<Eigen::VectorXd> y(x, box_->edges().size());
+      Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1> counts = Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>::Zero(y.size());
+      box_->reduce(y, counts);
+      return;
+    }
+    Surface::Vector y(x[0], x[1], x[2]);
+    Surface::Word applied;
+    surface_->reduce(y, applied);
+    for (int k = 0; k < 3; ++k) x[k] = y(k);
+  }
+
+  /// y <- the image of y nearest to x (the library's minimum image).
+  void nearest(const double* x, double* y) const {
+    if (box_) {
+      const Eigen::Map<const Eigen::VectorXd> xm(x, box_->edges().size());
+      Eigen::VectorXd ym = Eigen::Map<const Eigen::VectorXd>(y, box_->edges().size());
+      box_->nearest_image(xm, ym);
+      for (Eigen::Index k = 0; k < ym.size(); ++k) y[k] = ym(k);
+      return;
+    }
+    const Surface::Vector xv(x[0], x[1], x[2]);
+    Surface::Vector yv(y[0], y[1], y[2]);
+    surface_->nearest_image(xv, yv);
+    for (int k = 0; k < 3; ++k) y[k] = yv(k);
+  }
+
+  /// Appends to `ghosts` (and the body's index to `origin`) every image of the domain point y,
+  /// other than y itself, that lies within reach of the domain: every image that can be within
+  /// reach of a body in the domain. Box: per axis the shifts 0, +L (y_k < reach) and -L
+  /// (y_k > L - reach), all their combinations but none; surface: images_near.
+  void add_ghosts(const Eigen::Ref<const Eigen::VectorXd>& y, int body, double reach,
+                  std::vector<Eigen::VectorXd>& ghosts, std::vector<int>& origin, std::vector<int>& near) const {
+    if (box_) {
+      const Eigen::Index n = y.size();
+      std::vector<std::array<double, 3>> shifts(static_cast<std::size_t>(n));
+      std::vector<int> options(static_cast<std::size_t>(n)), at(static_cast<std::size_t>(n), 0);
+      for (Eigen::Index k = 0; k < n; ++k) {
+        const double l = box_->edges()(k);
+        auto& s = shifts[static_cast<std::size_t>(k)];
+        int m = 0;
+        s[m++] = 0.0;
+        if (y(k) < reach) s[m++] = 1.0;
+        if (y(k) > l - reach) s[m++] = -1.0;
+        options[static_cast<std::size_t>(k)] = m;
+      }
+      while (true) {
+        // The next combination (an odometer over the axes); the first, all zero, is y itself.
+        Eigen::Index k = 0;
+        while (k < n && ++at[static_cast<std::size_t>(k)] == options[static_cast<std::size_t>(k)]) {
+          at[static_cast<std::size_t>(k)] = 0;
+          ++k;
+        }
+        if (k == n) break;
+        Eigen::VectorXd g = y;
+        // y + L n, as PeriodicBox::nearest_image writes it, so that the ghost is the same point
+        // to the bit as the minimum image of the all-pairs reference.
+        for (Eigen::Index a = 0; a < n; ++a) {
+          g(a) = y(a) + box_->edges()(a) * shifts[static_cast<std::size_t>(a)][static_cast<std::size_t>(at[static_cast<std::size_t>(a)])];
+        }
+        ghosts.push_back(std::move(g));
+        origin.push_back(body);
+      }
+      return;
+    }
+    const Surface::Vector v(y(0), y(1), y(2));
+    near.clear();
+    surface_->images_near(v, reach, near);
+    for (const int k : near) {
+      if (k == 0) continue;  // images()[0] is the identity: y itself
+      Surface::Vector g = v;
+      surface_->apply(k, g);
+      ghosts.emplace_back(Eigen::VectorXd(g));
+      origin.push_back(body);
+    }
+  }
+
+  /// The squared distance in the covering space of the unwrapped points of a body at frames o
+  /// and p (msd): box |(x_p - x_o) + L .* (n_p - n_o)|^2; surface d(x_o, W_o^{-1} W_p x_p)^2.
+  double unwrapped_distance2(const Frames& f, std::size_t o, std::size_t p, int b) const {
+    if (box_) {
+      double s = 0.0;
+      for (Eigen::Index k = 0; k < box_->edges().size(); ++k) {
+        const auto jumps = static_cast<double>(f.images[p](k, b) - f.images[o](k, b));
+        const double d = (f.x[p](k, b) - f.x[o](k, b)) + box_->edges()(k) * jumps;
+        s += d * d;
+      }
+      return s;
+    }
+    Surface::Vector y;
+    carry(f, o, p, b, y, nullptr);
+    const double d = distance_of(space_, f.x[o].col(b).data(), y.data(), 3);
+    return d * d;
+  }
+
+  /// Surface: y <- W_o^{-1} W_p x_p, the body's point at frame p seen from the tile of its point
+  /// at frame o (and w <- the same isometry applied to its velocity at p, when w is given).
+  /// The common prefix of the two reduced words cancels; the rest is applied letter by letter
+  /// from the right: W_p's tail right to left, then the inverses of W_o's tail in order.
+  void carry(const Frames& f, std::size_t o, std::size_t p, int b, Surface::Vector& y, Surface::Vector* w) const {
+    const Word& wo = f.words[o][static_cast<std::size_t>(b)];
+    const Word& wp = f.words[p][static_cast<std::size_t>(b)];
+    std::size_t common = 0;
+    while (common < wo.size() && common < wp.size() && wo[common] == wp[common]) ++common;
+    y = Surface::Vector(f.x[p](0, b), f.x[p](1, b), f.x[p](2, b));
+    if (w) *w = Surface::Vector(f.v[p](0, b), f.v[p](1, b), f.v[p](2, b));
+    const int sides = surface_->sides(), half = sides / 2;
+    const auto apply = [&](int letter) {
+      y = (surface_->generator(letter) * y).eval();
+      if (w) *w = (surface_->generator(letter) * *w).eval();
+    };
+    for (std::size_t k = wp.size(); k > common; --k) apply(wp[k - 1]);
+    for (std::size_t k = common; k < wo.size(); ++k) apply((wo[k] + half) % sides);
+  }
+
+ private:
+  SpaceSpec space_;
+  std::optional<Box> box_;
+  std::optional<Surface> surface_;
+};
+
+namespace {
+
+/// The topology of a space (null without one), built once per space: a surface's images are a
+/// walk around every vertex of its polygon, not to be repeated per distance.
+std::shared_ptr<const Topology> topology_of(const SpaceSpec& space) {
+  if (!space.has_topology()) return nullptr;
+  static std::mutex mutex;
+  static SpaceSpec key;
+  static std::shared_ptr<const Topology> cached;
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (!cached || key.kind != space.kind || key.dim != space.dim || key.radius != space.radius ||
+      key.box != space.box || key.genus != space.genus) {
+    cached = std::make_shared<const Topology>(space);
+    key = space;
+  }
+  return cached;
+}
+
+}  // namespace
+
+double max_cutoff(const SpaceSpec& space) {
+  const auto topology = topology_of(space);
+  return topology ? topology->max_cutoff() : std::numeric_limits<double>::infinity();
+}
+
+Word parse_word(std::string_view text, int genus) {
+  Word word;
+  if (text == "e") return word;
+  const int sides = 4 * genus;
+  const auto bad = [&]() {
+    return program::InputError("word '" + program::cut_input(std::string(text)) +
+                               "': expected \"e\" or side numbers 1.." + std::to_string(sides) + " joined by '.'");
+  };
+  std::size_t at = 0;
+  while (true) {
+    int side = 0;
+    const auto [end, ec] = std::from_chars(text.data() + at, text.data() + text.size(), side);
+    if (ec != std::errc() || side < 1 || side > sides) throw bad();
+    word.push_back(static_cast<std::int16_t>(side - 1));
+    at = static_cast<std::size_t>(end - text.data());
+    if (at == text.size()) break;
+    if (text[at] != '.') throw bad();
+    ++at;
+  }
+  return word;
+}
+
+std::string word_text(const Word& word) {
+  if (word.empty()) return "e";
+  std::string out;
+  for (std::size_t k = 0; k < word.size(); ++k) {
+    if (k > 0) out += '.';
+    out += std::to_string(word[k] + 1);
+  }
+  return out;
+}
+
+void reduce_into_domain(const SpaceSpec& space, Eigen::MatrixXd& X) {
+  const auto topology = topology_of(space);
+  if (!topology) return;
+  for (Eigen::Index b = 0; b < X.cols(); ++b) topology->reduce(X.col(b).data());
+}
+
 // ---- the space's measure ---------------------------------------------------------------------
 
 double unit_sphere_area(int k) {
@@ -187,6 +416,7 @@ double shell_volume(const SpaceSpec& space, double a, double b) {
 }
 
 double total_volume(const SpaceSpec& space, double ball_radius) {
+  if (const auto topology = topology_of(space)) return topology->volume();
   if (space.kind == SpaceKind::sphere) return unit_sphere_area(space.dim) * std::pow(space.radius, space.dim);
   return shell_volume(space, 0.0, ball_radius);
 }
@@ -200,7 +430,9 @@ double msd_saturation(const SpaceSpec& space) {
 
 double distance(const SpaceSpec& space, const Eigen::Ref<const Eigen::VectorXd>& x,
                 const Eigen::Ref<const Eigen::VectorXd>& y) {
-  const Eigen::VectorXd xc = x, yc = y;
+  const Eigen::VectorXd xc = x;
+  Eigen::VectorXd yc = y;
+  if (const auto topology = topology_of(space)) topology->nearest(xc.data(), yc.data());
   return distance_of(space, xc.data(), yc.data(), static_cast<int>(xc.size()));
 }
 
@@ -235,7 +467,9 @@ Region bounding_region(const SpaceSpec& space, const Eigen::MatrixXd& X) {
 
 double default_rdf_max(const SpaceSpec& space, const Eigen::MatrixXd& first_frame) {
   double top = pi * space.radius, volume = total_volume(space);
-  if (space.kind != SpaceKind::sphere) {
+  if (space.has_topology()) {
+    top = max_cutoff(space);
+  } else if (space.kind != SpaceKind::sphere) {
     const double extent = bounding_region(space, first_frame).radius;
     top = extent / 4;
     volume = total_volume(space, extent);
@@ -256,7 +490,19 @@ struct Rdf::Frame {
   double volume = 0.0;       ///< the region's volume
 };
 
-Rdf::Rdf(SpaceSpec space, double r_max, int bins) : space_(space), r_max_(r_max), bins_(bins) {
+Rdf::Rdf(SpaceSpec space, double r_max, int bins)
+    : space_(space), topology_(topology_of(space)), r_max_(r_max), bins_(bins) {
+  if (topology_) {
+    // Beyond the largest cutoff a pair may have two images within r, and a shell about a body
+    // overlaps itself: the covering space's shell is no longer the quotient's.
+    const double top = topology_->max_cutoff();
+    if (!(r_max > 0.0 && r_max <= top)) {
+      throw program::InputError(program::Origin{}, "--rdf-max",
+                                "expected a distance in (0, " + number(top) + "] on this " +
+                                    (topology_->is_box() ? std::string("periodic box") : "genus-" + std::to_string(space.genus) + " surface") +
+                                    " (the largest allowed cutoff is " + number(top) + "), got " + number(r_max));
+    }
+  }
   const double top = space.kind == SpaceKind::sphere ? pi * space.radius : std::numeric_limits<double>::infinity();
   if (!(r_max > 0.0 && r_max <= top)) {
     throw program::InputError(program::Origin{}, "--rdf-max",
@@ -298,6 +544,14 @@ Rdf::Frame Rdf::prepare(const Eigen::MatrixXd& X, const std::optional<Region>& g
   Frame f;
   const int n = static_cast<int>(X.cols());
   f.centre.assign(static_cast<std::size_t>(n), 1);
+  if (topology_) {
+    // A quotient has no edge: every body is a centre, at density (N - 1) / the domain's volume.
+    f.points = X;
+    for (int b = 0; b < n; ++b) topology_->reduce(f.points.col(b).data());
+    f.centres = n;
+    f.volume = topology_->volume();
+    return f;
+  }
   if (space_.kind == SpaceKind::sphere) {
     f.points = X;
     f.centres = n;
@@ -346,7 +600,33 @@ void Rdf::accumulate(const Eigen::MatrixXd& X, const std::optional<Region>& regi
   const Frame f = prepare(X, region);
   const int n = static_cast<int>(X.cols());
   const int a = static_cast<int>(X.rows());
-  if (n >= 2 && f.centres > 0) {
+  if (topology_ && n >= 2) {
+    // The bodies and their ghost images within r_max of the domain (every image that can be
+    // within r_max of a body), in one neighbour index of the covering space. Below max_cutoff
+    // each pair has at most one image within r_max, its minimum image, so each ordered pair
+    // (i, j) is counted once, as accumulate_all_pairs counts it.
+    const double reach = r_max_ * (1 + 1e-6);
+    std::vector<Eigen::VectorXd> ghosts;
+    std::vector<int> origin, near;
+    for (int b = 0; b < n; ++b) origin.push_back(b);
+    for (int b = 0; b < n; ++b) topology_->add_ghosts(f.points.col(b), b, reach, ghosts, origin, near);
+    Eigen::MatrixXd all(a, static_cast<Eigen::Index>(origin.size()));
+    all.leftCols(n) = f.points;
+    for (std::size_t g = 0; g < ghosts.size(); ++g) all.col(n + static_cast<Eigen::Index>(g)) = ghosts[g];
+    NeighbourLists lists;
+    std::visit([&](const auto& chart) {
+      using Chart = std::remove_cvref_t<decltype(chart)>;
+      NeighbourIndex<Chart> index;
+      index.build(chart, all, reach, lists);
+    }, chart_of(space_));
+    for (int i = 0; i < n; ++i) {
+      for (int k = lists.begin(i); k < lists.end(i); ++k) {
+        const int j = lists.index[static_cast<std::size_t>(k)];
+        if (origin[static_cast<std::size_t>(j)] == i) continue;
+        add(distance_of(space_, f.points.col(i).data(), all.col(j).data(), a));
+      }
+    }
+  } else if (n >= 2 && f.centres > 0) {
     NeighbourLists lists;
     std::visit(
         [&](const auto& chart) {
@@ -376,10 +656,14 @@ void Rdf::accumulate_all_pairs(const Eigen::MatrixXd& X, const std::optional<Reg
   const Frame f = prepare(X, region);
   const int n = static_cast<int>(X.cols());
   const int a = static_cast<int>(X.rows());
+  Eigen::VectorXd y(a);
   for (int i = 0; i < n; ++i) {
     if (!f.centre[static_cast<std::size_t>(i)]) continue;
     for (int j = 0; j < n; ++j) {
-      if (j != i) add(distance_of(space_, f.points.col(i).data(), f.points.col(j).data(), a));
+      if (j == i) continue;
+      y = f.points.col(j);
+      if (topology_) topology_->nearest(f.points.col(i).data(), y.data());  // the minimum image
+      add(distance_of(space_, f.points.col(i).data(), y.data(), a));
     }
   }
   for (int k = 0; k < bins_; ++k) {
@@ -437,10 +721,33 @@ Correlation correlate(const Frames& frames, long max_lag, F&& f) {
   return out;
 }
 
+/// On a quotient: the frames must hold the image counts (box) or words (surface) of every body.
+void check_unwrapping(const Frames& frames, const Topology& topology, const std::string& what) {
+  const bool box = topology.is_box();
+  const std::size_t held = box ? frames.images.size() : frames.words.size();
+  if (held != frames.x.size()) {
+    throw program::InputError(what + " on a " + (box ? "periodic box needs the image counts" : "compact surface needs the words") +
+                              " of every frame (the unwrapped positions)");
+  }
+  for (std::size_t f = 0; f < held; ++f) {
+    const bool fits = box ? frames.images[f].rows() == frames.space.dim && frames.images[f].cols() == frames.bodies()
+                          : static_cast<int>(frames.words[f].size()) == frames.bodies();
+    if (!fits) throw program::InputError(what + ": frame " + std::to_string(f) + "'s image counts or words do not match its bodies");
+  }
+}
+
 }  // namespace
 
 Correlation msd(const Frames& frames, long max_lag) {
   const int a = frames.x.empty() ? 0 : static_cast<int>(frames.x.front().rows());
+  if (const auto topology = topology_of(frames.space)) {
+    // On a quotient the wrapped points jump across the domain: the displacement is that of the
+    // unwrapped points, from the image counts or the words.
+    check_unwrapping(frames, *topology, "the MSD");
+    return correlate(frames, max_lag, [&](long o, long p, int b) {
+      return topology->unwrapped_distance2(frames, static_cast<std::size_t>(o), static_cast<std::size_t>(p), b);
+    });
+  }
   return correlate(frames, max_lag, [&](long o, long p, int b) {
     const double d = distance_of(frames.space, frames.x[static_cast<std::size_t>(o)].col(b).data(),
                                  frames.x[static_cast<std::size_t>(p)].col(b).data(), a);
@@ -453,6 +760,21 @@ Correlation vacf(const Frames& frames, long max_lag) {
     throw program::InputError("the velocity autocorrelation needs the velocities (the bodies' masses are unknown)");
   }
   const int a = frames.x.empty() ? 0 : static_cast<int>(frames.x.front().rows());
+  const auto topology = topology_of(frames.space);
+  if (topology && !topology->is_box()) {
+    // On a surface both velocities are carried into the covering space by the words: the later
+    // one by the isometry W_o^{-1} W_p that takes its point next to the earlier one's, then by
+    // parallel transport along the geodesic between them. (On a box the isometries are
+    // translations, which leave velocities alone.)
+    check_unwrapping(frames, *topology, "the velocity autocorrelation");
+    return correlate(frames, max_lag, [&](long o, long p, int b) {
+      const auto so = static_cast<std::size_t>(o), sp = static_cast<std::size_t>(p);
+      Topology::Surface::Vector y, w;
+      topology->carry(frames, so, sp, b, y, &w);
+      return transported_dot_of(frames.space, frames.x[so].col(b).data(), frames.v[so].col(b).data(), y.data(),
+                                w.data(), a);
+    });
+  }
   return correlate(frames, max_lag, [&](long o, long p, int b) {
     const auto so = static_cast<std::size_t>(o), sp = static_cast<std::size_t>(p);
     return transported_dot_of(frames.space, frames.x[so].col(b).data(), frames.v[so].col(b).data(),

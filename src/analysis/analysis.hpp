@@ -6,11 +6,17 @@
 /// parallel transport; per-body averages. They work on frames of embedding points (and
 /// velocities), read from a run's outputs by read_run (trajectory.csv or trajectory.h5) or
 /// handed in from Python: one library behind `sesi analyze` and `sesi.analysis`.
+/// On a quotient (a periodic box on E^n, SpaceSpec::box; a compact surface H^2/Gamma,
+/// SpaceSpec::genus) distances are minimum-image geodesic distances (the topology's own
+/// nearest_image), g(r) is normalised by the covering space's shell over the domain's volume up to
+/// the topology's largest cutoff, and the MSD follows the unwrapped positions (image counts, words).
 
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <optional>
+#include <string_view>
 #include <string>
 #include <vector>
 
@@ -22,6 +28,29 @@ namespace sesi::analysis {
 
 using program::SpaceKind;
 using program::SpaceSpec;
+
+// ---- the space's topology ----------------------------------------------------------------------
+
+/// A group element of a compact surface as a word: letters 0..4g-1 (side indices), freely
+/// reduced; the body's unwrapped point is W x (include/sesi/topologies/hyperbolic_surface.hpp).
+using Word = std::vector<std::int16_t>;
+/// Image counts of a periodic box, dim x bodies: the unwrapped point of body b is x_b + L .* n_b.
+using ImageCounts = Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic>;
+
+/// The topology's largest allowed cutoff (max_cutoff() of PeriodicBox or HyperbolicSurface:
+/// below it the minimum image is unique); infinity without a topology.
+/// @throws InputError when the box or genus is not one the library accepts
+double max_cutoff(const SpaceSpec& space);
+
+/// A word from its text in trajectory.csv and H5MD: "e" (the identity) or the 1-based side
+/// numbers joined by '.' ("3.7.2" is g_2 g_6 g_1). @throws InputError naming the text
+Word parse_word(std::string_view text, int genus);
+/// The text of a word, as the outputs write it.
+std::string word_text(const Word& word);
+
+/// Each column of X (a world point) brought into the topology's domain by its isometries
+/// (the box's [0, L_k); the surface's polygon); unchanged without a topology.
+void reduce_into_domain(const SpaceSpec& space, Eigen::MatrixXd& X);
 
 // ---- the space's measure ---------------------------------------------------------------------
 
@@ -35,7 +64,8 @@ double unit_sphere_area(int k);
 /// On S^n, radii beyond pi R hold nothing.
 double shell_volume(const SpaceSpec& space, double a, double b);
 
-/// S^n: the whole sphere's volume Omega_n R^n; H^n and E^n: the geodesic ball of radius D.
+/// S^n: the whole sphere's volume Omega_n R^n; a quotient: its domain's (the box's L_1 ... L_n,
+/// the surface's 4 pi (g - 1) R^2, Gauss-Bonnet); else (H^n, E^n): the geodesic ball of radius D.
 double total_volume(const SpaceSpec& space, double ball_radius = 0.0);
 
 /// S^n: the mean squared geodesic distance of two independent uniform points, where the MSD of
@@ -43,7 +73,8 @@ double total_volume(const SpaceSpec& space, double ball_radius = 0.0);
 /// NaN on H^n and E^n (no saturation).
 double msd_saturation(const SpaceSpec& space);
 
-/// Geodesic distance of two embedding points (H^n: by radii and directions, accurate far out).
+/// Geodesic distance of two embedding points (H^n: by radii and directions, accurate far out); on a
+/// quotient, of their minimum images (x and y in the domain or near it).
 double distance(const SpaceSpec& space, const Eigen::Ref<const Eigen::VectorXd>& x,
                 const Eigen::Ref<const Eigen::VectorXd>& y);
 
@@ -70,20 +101,28 @@ struct Region {
 /// body.
 Region bounding_region(const SpaceSpec& space, const Eigen::MatrixXd& X);
 
-/// The default largest distance of g(r): pi R on S^n (the whole sphere); on H^n and E^n a
-/// quarter of the radius of the first frame's bounding_region, so that the bodies within its
-/// inner three quarters are shell centres; in both at most ten mean spacings (V/N)^{1/n} (V the
-/// sphere's or the region's volume), so that many bodies still cost O(N) per frame.
+/// The default largest distance of g(r): pi R on S^n (the whole sphere); on a quotient its
+/// max_cutoff; on H^n and E^n a quarter of the radius of the first frame's bounding_region, so
+/// that the bodies within its inner three quarters are shell centres; in all at most ten mean
+/// spacings (V/N)^{1/n} (V the sphere's, the domain's or the region's volume), so that many
+/// bodies still cost O(N) per frame.
 double default_rdf_max(const SpaceSpec& space, const Eigen::MatrixXd& first_frame);
+
+/// The minimum image of a quotient, shared by the observables (defined in analysis.cpp).
+class Topology;
 
 /// g(r) accumulated over frames (freud's RDF shape): bins of equal width over [0, r_max).
 class Rdf {
  public:
-  /// @throws InputError when r_max is not in (0, pi R] on S^n or (0, inf) elsewhere, or bins < 1
+  /// @throws InputError when r_max is not in (0, pi R] on S^n, (0, max_cutoff] on a quotient
+  /// (the message names the largest) or (0, inf) elsewhere, or bins < 1
   Rdf(SpaceSpec space, double r_max, int bins);
 
   /// Adds one frame (columns: embedding points) through the neighbour index (O(N) for a fixed
-  /// r_max and density). region: H^n and E^n only (default: bounding_region); ignored on S^n.
+  /// r_max and density). region: H^n and E^n only (default: bounding_region); ignored on S^n
+  /// and on a quotient, where every body is a shell centre and the density is N / domain volume
+  /// (the frame's points are first reduced into the domain; pairs across the box's faces or the
+  /// polygon's sides come from ghost images).
   void accumulate(const Eigen::MatrixXd& X, const std::optional<Region>& region = std::nullopt);
   /// The same counts from all pairs, O(N^2): the reference of the tests.
   void accumulate_all_pairs(const Eigen::MatrixXd& X, const std::optional<Region>& region = std::nullopt);
@@ -109,6 +148,7 @@ class Rdf {
   void add(double d);
 
   SpaceSpec space_;
+  std::shared_ptr<const Topology> topology_;  ///< null without a topology
   double r_max_ = 0.0;
   int bins_ = 0;
   long frames_ = 0, centres_ = 0;
@@ -127,6 +167,10 @@ struct Frames {
   std::vector<Eigen::MatrixXd> x;
   std::vector<Eigen::MatrixXd> v;  ///< empty when the velocities are unknown
   std::vector<double> masses;      ///< empty when unknown
+  /// E^n box: per frame, the image counts (dim x bodies). Empty otherwise.
+  std::vector<ImageCounts> images;
+  /// H^2 surface: per frame, per body, the word W_b. Empty otherwise.
+  std::vector<std::vector<Word>> words;
   int bodies() const { return x.empty() ? 0 : static_cast<int>(x.front().cols()); }
 };
 
@@ -140,7 +184,11 @@ struct Correlation {
 };
 
 /// Mean-squared geodesic displacement <d(x_b(t0), x_b(t0 + lag))^2> over every time origin t0
-/// and body b. max_lag < 0: half the frames.
+/// and body b. max_lag < 0: half the frames. On a quotient d is the distance in the covering
+/// space of the unwrapped points: on a box |(x_p - x_o) + L .* (n_p - n_o)|; on a surface
+/// d(x_o, W_o^{-1} W_p x_p), the relative element taken from the words (so that a body far out
+/// in the cover loses no digits). @throws InputError on a quotient without frames.images or
+/// frames.words.
 Correlation msd(const Frames& frames, long max_lag = -1);
 /// Velocity autocorrelation <P v_b(t0), v_b(t0 + lag)> (transported_dot) over every time origin
 /// and body; at lag 0, the mean squared speed (2K / m per body). Needs frames.v.
@@ -155,7 +203,8 @@ struct ReadOptions {
   bool velocities = true;                                  ///< read p and the masses for v
 };
 
-/// What summary.json says of a finished run (the space, the trajectory file, the masses).
+/// What summary.json says of a finished run (the space with its box or genus, the trajectory
+/// file, the masses).
 struct RunInfo {
   SpaceSpec space;
   std::string trajectory;  ///< "trajectory.csv" or "trajectory.h5"
@@ -168,7 +217,8 @@ struct RunInfo {
 RunInfo read_run_info(const std::filesystem::path& dir);
 
 /// The frames of dir's trajectory (trajectory.csv, or trajectory.h5 in a build with HDF5)
-/// between from and to: embedding points as written; velocities from the chart coordinates and
+/// between from and to: embedding points as written (on a quotient: in the domain, with the
+/// image counts or words of the run); velocities from the chart coordinates and
 /// momenta through the chart's velocity map, when the masses are known (summary.json, or
 /// H5MD's particles/all/mass). Frames off the even time grid (a run's last row at a t_end off
 /// it) are left out. Throws InputError with one line naming the file.

@@ -1,5 +1,7 @@
 // Reading a run's outputs for the observables (analysis.hpp): summary.json, then trajectory.csv
 // or trajectory.h5 (the layouts of src/outputs/recorder.hpp and h5md_writer.hpp).
+#include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -190,35 +192,68 @@ void add_velocities(Frames& frames, const std::vector<Eigen::MatrixXd>& q, const
   }
 }
 
+/// The columns each body adds after its x columns on a topology: the image counts n1..nn (box),
+/// or the unwrapped point u1..ua and the word (surface): recorder.cpp's layout.
+int topology_columns(const SpaceSpec& space) {
+  if (!space.box.empty()) return space.dim;
+  if (space.genus != 0) return ambient_of(space) + 1;
+  return 0;
+}
+
 Frames read_csv(const fs::path& path, const RunInfo& info, const ReadOptions& options) {
   std::ifstream in(path, std::ios::binary);
   if (!in) refuse(path, "missing or unreadable: the run's trajectory");
   const int n = info.space.dim, a = ambient_of(info.space);
+  const bool box = !info.space.box.empty(), surface = info.space.genus != 0;
   const long bodies = info.bodies;
-  const long width = 1 + bodies * (2L * n + a);
+  const long per_body = 2L * n + a + topology_columns(info.space);
+  const long width = 1 + bodies * per_body;
   std::string line;
   if (!std::getline(in, line)) refuse(path, "empty: no header row");
   {
-    // The header of recorder.cpp: t, then per body b<b>_q<i>, b<b>_p<i>, b<b>_x<i>.
+    // The header of recorder.cpp: t, then per body b<b>_q<i>, b<b>_p<i>, b<b>_x<i>, and on a
+    // topology b<b>_n<i> (box) or b<b>_u<i>, b<b>_word (surface).
     std::string expected = "t";
     for (long b = 1; b <= bodies; ++b) {
       const std::string body = "b" + std::to_string(b) + "_";
       for (int i = 1; i <= n; ++i) expected += "," + body + "q" + std::to_string(i);
       for (int i = 1; i <= n; ++i) expected += "," + body + "p" + std::to_string(i);
       for (int i = 1; i <= a; ++i) expected += "," + body + "x" + std::to_string(i);
+      if (box) {
+        for (int i = 1; i <= n; ++i) expected += "," + body + "n" + std::to_string(i);
+      } else if (surface) {
+        for (int i = 1; i <= a; ++i) expected += "," + body + "u" + std::to_string(i);
+        expected += "," + body + "word";
+      }
     }
     if (line != expected) refuse(path, "its header is not that of a sesi trajectory of the run in summary.json");
   }
   std::vector<double> t;
   std::vector<std::vector<double>> rows;
+  std::vector<std::vector<Word>> words;  // per row, per body (surface)
   std::vector<double> row;
   long number = 1;
   while (std::getline(in, line)) {
     ++number;
     row.clear();
+    std::vector<Word> row_words;
     const char* at = line.data();
     const char* end = line.data() + line.size();
+    long cell = 0;
     while (at <= end) {
+      // A surface's word cell (the last of each body's columns) is text; the others numbers.
+      if (surface && cell > 0 && (cell - 1) % per_body == per_body - 1) {
+        const char* comma = std::find(at, end, ',');
+        try {
+          row_words.push_back(parse_word(std::string_view(at, static_cast<std::size_t>(comma - at)), info.space.genus));
+        } catch (const InputError& e) {
+          refuse(path, "line " + std::to_string(number) + ": " + e.what());
+        }
+        row.push_back(0.0);
+        at = comma + 1;
+        ++cell;
+        continue;
+      }
       double v = 0.0;
       const auto [next, ec] = std::from_chars(at, end, v);
       if (ec != std::errc() || (next != end && *next != ',')) {
@@ -226,6 +261,7 @@ Frames read_csv(const fs::path& path, const RunInfo& info, const ReadOptions& op
       }
       row.push_back(v);
       at = next + 1;
+      ++cell;
     }
     if (static_cast<long>(row.size()) != width) {
       refuse(path, "line " + std::to_string(number) + ": " + std::to_string(row.size()) + " values, expected " +
@@ -233,6 +269,7 @@ Frames read_csv(const fs::path& path, const RunInfo& info, const ReadOptions& op
     }
     t.push_back(row[0]);
     rows.push_back(row);
+    if (surface) words.push_back(std::move(row_words));
   }
   Frames frames;
   frames.space = info.space;
@@ -243,13 +280,24 @@ Frames read_csv(const fs::path& path, const RunInfo& info, const ReadOptions& op
     const std::vector<double>& r = rows[k];
     frames.t.push_back(r[0]);
     Eigen::MatrixXd x(a, bodies), qk(n, bodies), pk(n, bodies);
+    ImageCounts images(box ? n : 0, box ? bodies : 0);
     for (long b = 0; b < bodies; ++b) {
-      const std::size_t base = 1 + static_cast<std::size_t>(b * (2L * n + a));
+      const std::size_t base = 1 + static_cast<std::size_t>(b * per_body);
       for (int i = 0; i < n; ++i) qk(i, b) = r[base + static_cast<std::size_t>(i)];
       for (int i = 0; i < n; ++i) pk(i, b) = r[base + static_cast<std::size_t>(n + i)];
       for (int i = 0; i < a; ++i) x(i, b) = r[base + static_cast<std::size_t>(2 * n + i)];
+      for (int i = 0; box && i < n; ++i) {
+        const double count = r[base + static_cast<std::size_t>(2 * n + a + i)];
+        // Image counts are whole numbers well inside the doubles' exact integers (2^53).
+        if (!(count == std::trunc(count) && std::abs(count) < 0x1p53)) {
+          refuse(path, "row at t = " + program::format_number(r[0]) + ": an image count that is not a whole number");
+        }
+        images(i, b) = static_cast<std::int64_t>(count);
+      }
     }
     frames.x.push_back(std::move(x));
+    if (box) frames.images.push_back(std::move(images));
+    if (surface) frames.words.push_back(std::move(words[k]));
     if (velocities) {
       q.push_back(std::move(qk));
       p.push_back(std::move(pk));
@@ -286,6 +334,61 @@ bool read_dataset(hid_t file, const char* name, std::vector<double>& out, std::v
   return H5Dread(dataset.id, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) >= 0;
 }
 
+/// particles/all/image/value, [frames][bodies][dim] whole numbers; false when missing or of
+/// other dimensions.
+bool read_images(hid_t file, hsize_t frames, hsize_t bodies, hsize_t dim, std::vector<std::int64_t>& out) {
+  const char* name = "particles/all/image/value";
+  if (H5Lexists(file, "particles/all/image", H5P_DEFAULT) <= 0 || H5Lexists(file, name, H5P_DEFAULT) <= 0) return false;
+  const Id dataset{H5Dopen2(file, name, H5P_DEFAULT), H5Dclose};
+  if (dataset.id < 0) return false;
+  const Id space{H5Dget_space(dataset.id), H5Sclose};
+  if (space.id < 0 || H5Sget_simple_extent_ndims(space.id) != 3) return false;
+  std::array<hsize_t, 3> dims{};
+  H5Sget_simple_extent_dims(space.id, dims.data(), nullptr);
+  if (dims[0] != frames || dims[1] != bodies || dims[2] != dim) return false;
+  out.resize(static_cast<std::size_t>(frames * bodies * dim));
+  if (out.empty()) return true;
+  return H5Dread(dataset.id, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) >= 0;
+}
+
+/// particles/all/word/value, [frames][bodies] variable-length strings (the text of
+/// trajectory.csv's b<k>_word): the words per frame and body.
+void read_words(const fs::path& path, hid_t file, hsize_t frames, hsize_t bodies, int genus,
+                std::vector<std::vector<Word>>& out) {
+  const char* name = "particles/all/word/value";
+  const auto missing = [&]() { refuse(path, "has no particles/all/word of the run's surface in summary.json"); };
+  if (H5Lexists(file, "particles/all/word", H5P_DEFAULT) <= 0 || H5Lexists(file, name, H5P_DEFAULT) <= 0) missing();
+  const Id dataset{H5Dopen2(file, name, H5P_DEFAULT), H5Dclose};
+  if (dataset.id < 0) missing();
+  const Id space{H5Dget_space(dataset.id), H5Sclose};
+  if (space.id < 0 || H5Sget_simple_extent_ndims(space.id) != 2) missing();
+  std::array<hsize_t, 2> dims{};
+  H5Sget_simple_extent_dims(space.id, dims.data(), nullptr);
+  if (dims[0] != frames || dims[1] != bodies) missing();
+  const Id type{H5Tcopy(H5T_C_S1), H5Tclose};
+  if (type.id < 0 || H5Tset_size(type.id, H5T_VARIABLE) < 0) missing();
+  std::vector<char*> texts(static_cast<std::size_t>(frames * bodies), nullptr);
+  if (!texts.empty() && H5Dread(dataset.id, type.id, H5S_ALL, H5S_ALL, H5P_DEFAULT, texts.data()) < 0) missing();
+  // The strings HDF5 allocated, freed however the words turn out.
+  struct Reclaim {
+    std::vector<char*>& texts;
+    ~Reclaim() {
+      for (char* text : texts) H5free_memory(text);
+    }
+  } reclaim{texts};
+  out.assign(static_cast<std::size_t>(frames), std::vector<Word>(static_cast<std::size_t>(bodies)));
+  for (std::size_t f = 0; f < out.size(); ++f) {
+    for (std::size_t b = 0; b < bodies; ++b) {
+      const char* text = texts[f * bodies + b];
+      try {
+        out[f][b] = parse_word(text ? std::string_view(text) : std::string_view(), genus);
+      } catch (const InputError& e) {
+        refuse(path, std::string("particles/all/word: ") + e.what());
+      }
+    }
+  }
+}
+
 Frames read_h5md(const fs::path& path, const RunInfo& info, const ReadOptions& options) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // failures become one line, not HDF5's stack
   const Id file{H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose};
@@ -313,10 +416,21 @@ Frames read_h5md(const fs::path& path, const RunInfo& info, const ReadOptions& o
                  dq[2] == static_cast<hsize_t>(n) && dp[2] == static_cast<hsize_t>(n);
   }
   if (velocities) frames.masses = masses;
+  // On a topology: the image counts (particles/all/image) or the words (particles/all/word).
+  std::vector<std::int64_t> image;
+  std::vector<std::vector<Word>> words;
+  if (!info.space.box.empty() && !read_images(file.id, dt[0], bodies, static_cast<hsize_t>(n), image)) {
+    refuse(path, "has no particles/all/image of the run's periodic box in summary.json");
+  }
+  if (info.space.genus != 0) read_words(path, file.id, dt[0], bodies, info.space.genus, words);
   std::vector<Eigen::MatrixXd> qs, ps;
   const auto cols = static_cast<Eigen::Index>(bodies);
   for (const std::size_t k : select(t, options)) {
     frames.t.push_back(t[k]);
+    if (!image.empty()) {
+      frames.images.emplace_back(Eigen::Map<const ImageCounts>(&image[k * bodies * static_cast<hsize_t>(n)], n, cols));
+    }
+    if (!words.empty()) frames.words.push_back(words[k]);
     // H5MD's [frame][body][coordinate] is Eigen's column-major coordinate x body.
     frames.x.emplace_back(Eigen::Map<const Eigen::MatrixXd>(&x[k * bodies * a], a, cols));
     if (velocities) {
@@ -370,6 +484,33 @@ RunInfo read_run_info(const fs::path& dir) {
     const Json* radius = space->find("radius");
     if (!radius || radius->kind != Json::Kind::number || !(radius->number > 0.0)) refuse(path, "space.radius missing");
     info.space.radius = radius->number;
+  }
+  // The topology (summary.cpp): "box": [L1, ..., Ln] on E^n, "genus": g on H^2.
+  if (const Json* box = space->find("box"); box && box->kind != Json::Kind::null) {
+    if (box->kind != Json::Kind::array || info.space.kind != SpaceKind::euclidean ||
+        static_cast<int>(box->items.size()) != info.space.dim) {
+      refuse(path, "space.box is not a box of this space's dimension");
+    }
+    for (const Json& edge : box->items) {
+      if (edge.kind != Json::Kind::number || !(edge.number > 0.0 && std::isfinite(edge.number))) {
+        refuse(path, "space.box has an edge that is not a finite number > 0");
+      }
+      info.space.box.push_back(edge.number);
+    }
+  }
+  if (const Json* genus = space->find("genus"); genus && genus->kind != Json::Kind::null) {
+    if (genus->kind != Json::Kind::number || genus->number != std::trunc(genus->number) || genus->number < 2 ||
+        genus->number > 1000 || info.space.kind != SpaceKind::hyperbolic || info.space.dim != 2) {
+      refuse(path, "space.genus is not the genus of a surface on H^2");
+    }
+    info.space.genus = static_cast<int>(genus->number);
+  }
+  if (info.space.has_topology()) {
+    try {
+      max_cutoff(info.space);  // the library accepts the box or genus
+    } catch (const InputError& e) {
+      refuse(path, e.what());
+    }
   }
   const Json* bodies = json.find("bodies");
   if (!bodies || bodies->kind != Json::Kind::number || bodies->number < 1) refuse(path, "no body count");

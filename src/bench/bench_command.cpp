@@ -192,6 +192,13 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
                 "--scaling on H^n: comma-separated distances of the cluster's centre from the chart origin, in "
                 "radii (default 0); one row per distance, the far / origin ratios printed.")
       ->type_name("LIST");
+  b->add_flag("--box", o.box,
+              "--scaling on E^n: the bodies in a periodic box at the same density (issue #26), with LAMMPS "
+              "(lmp, mpirun -np THREADS) on the same bodies when it is installed; the ratios printed.");
+  b->add_option("--genus", o.genera,
+                "--scaling on H^2: comma-separated genera of compact surfaces holding the N bodies at the same "
+                "density (R = (N / (4 pi (g - 1) rho))^(1/2)), with the E^2 box at the same N; ratios printed.")
+      ->type_name("LIST");
   std::string footer = "\nMETHODS:";
   for (const bench::MethodSpec& m : bench::all_methods()) footer += " " + std::string(m.name);
   footer +=
@@ -586,6 +593,10 @@ int bench_command(const BenchOptions& o) {
     if (scene.space.kind == SpaceKind::euclidean || scene.dim() < 2 || scene.dim() > 3)
       throw InputError("sesi bench: scene files on S^n or H^n with n = 2 or 3 only (" +
                        o.scene + ")");
+    // Its work-precision sweep runs every method, and builds the whole H^n: not a compact surface.
+    if (scene.space.has_topology())
+      throw InputError("sesi bench: scene files without a topology only (" + o.scene + " has genus " +
+                       std::to_string(scene.space.genus) + "); time it with sesi run");
   }
   double default_t = bench::kepler_t_end;
   if (o.scene == "paper") default_t = bench::paper_t_end;

@@ -41,6 +41,8 @@ struct BenchOptions {
   std::string center_distances;            ///< H^n: comma-separated centre distances in radii (empty: 0)
   long check_every = 0;                    ///< the runs' check cadence (0: sesi run's default)
   double skin = sesi::default_skin_fraction;  ///< the runs' neighbour_skin
+  bool box = false;                        ///< E^n in a periodic box, with LAMMPS rows (issue #26)
+  std::string genera;                      ///< H^2: comma-separated genera of compact surfaces (empty: none)
 };
 
 /// Add the `bench` subcommand to app, parsing into options.

@@ -10,12 +10,15 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <sesi/parallel.hpp>
+#include <sesi/topologies/hyperbolic_surface.hpp>
 
 #include "bench_scaling_scenes.hpp"
 #include "errors.hpp"
@@ -46,7 +49,12 @@ struct Row {
   Measured m;
   int stages;                   ///< force evaluations per step
   double center_distance = 0;   ///< H^n: the cluster's centre, radii from the chart origin
+  std::string topology = {};    ///< "" | "box" (E^n periodic box) | "genus G" (compact surface)
 };
+
+std::string topology_label(const ScalingPoint& p) {
+  return p.box ? "box" : (p.genus != 0 ? "genus " + std::to_string(p.genus) : std::string());
+}
 
 std::vector<long> parse_list(const std::string& text, const char* option, long least, long most) {
   std::vector<long> out;
@@ -211,15 +219,16 @@ std::string space_label(SpaceKind kind) { return std::string(space_name(kind)); 
 
 void write_row(std::FILE* csv, const Row& r) {
   const double pairs_per_step = static_cast<double>(r.m.pairs) * r.stages;
-  std::fprintf(csv, "%d,%s,%d,%s,%s,%d,%.6g,%.6g,%.4g,%.1f,%g\n", r.bodies, r.space.c_str(), r.dim,
+  std::fprintf(csv, "%d,%s,%d,%s,%s,%d,%.6g,%.6g,%.4g,%.1f,%g,%s\n", r.bodies, r.space.c_str(), r.dim,
                r.potential.c_str(), r.method.c_str(), r.m.threads, r.m.seconds_per_step, pairs_per_step,
                pairs_per_step > 0 ? r.m.seconds_per_step / pairs_per_step * 1e9 : 0.0, r.m.peak_rss_mb,
-               r.center_distance);
+               r.center_distance, r.topology.c_str());
   std::fflush(csv);
   std::printf("  %7d bodies  %-10s %d  %-17s %-15s %d thr  %10.4g s/step  %8.1f ns/pair  %7.1f MB", r.bodies,
               r.space.c_str(), r.dim, r.potential.c_str(), r.method.c_str(), r.m.threads, r.m.seconds_per_step,
               pairs_per_step > 0 ? r.m.seconds_per_step / pairs_per_step * 1e9 : 0.0, r.m.peak_rss_mb);
   if (r.center_distance != 0) std::printf("  centre %g R away", r.center_distance);
+  if (!r.topology.empty()) std::printf("  %s", r.topology.c_str());
   std::printf("\n");
   std::fflush(stdout);
 }
@@ -236,6 +245,7 @@ void print_summary(const std::vector<Row>& rows) {
   for (const Row& r : rows) {
     std::string name = r.space + " " + std::to_string(r.dim) + " " + r.method + " " + std::to_string(r.m.threads) + " threads";
     if (r.center_distance != 0) name += " centre " + format_distance(r.center_distance) + " R";
+    if (!r.topology.empty()) name += " " + r.topology;
     series[name].push_back(&r);
   }
   std::printf("\nexponent of seconds per step against N (log-log slope):\n");
@@ -252,11 +262,24 @@ void print_summary(const std::vector<Row>& rows) {
   }
   std::printf("\nratios per step (same N, same run):\n");
   for (const Row& r : rows) {
-    if (r.space == "flat-periodic") continue;
-    std::printf("  %7d bodies %-10s %d %-15s %d thr:", r.bodies, r.space.c_str(), r.dim, r.method.c_str(),
-                r.m.threads);
+    if (r.space == "flat-periodic" || r.space == "lammps") continue;
+    std::printf("  %7d bodies %-10s %d %-15s %d thr%s%s:", r.bodies, r.space.c_str(), r.dim, r.method.c_str(),
+                r.m.threads, r.topology.empty() ? "" : " ", r.topology.c_str());
     for (const Row& q : rows) {
       if (q.bodies != r.bodies || &q == &r) continue;
+      if (!r.topology.empty() || !q.topology.empty() || q.space == "lammps") {
+        // issue #26: the box against LAMMPS on as many ranks as threads; a surface against the
+        // box at the same N; a genus against genus 2 at the same N (so per body too).
+        const bool same = q.method == r.method && q.m.threads == r.m.threads;
+        if (q.space == "lammps" && r.topology == "box" && q.dim == r.dim && q.m.threads == r.m.threads) {
+          std::printf("  / LAMMPS (%d ranks) %.2f", q.m.threads, r.m.seconds_per_step / q.m.seconds_per_step);
+        } else if (r.topology.starts_with("genus") && q.topology == "box" && q.dim == 2 && same) {
+          std::printf("  / E^2 box %.2f", r.m.seconds_per_step / q.m.seconds_per_step);
+        } else if (r.topology.starts_with("genus") && r.topology != "genus 2" && q.topology == "genus 2" && same) {
+          std::printf("  / genus 2 %.2f", r.m.seconds_per_step / q.m.seconds_per_step);
+        }
+        continue;
+      }
       if (q.space == "flat-periodic") {
         std::printf("  / flat cell list %.2f", r.m.seconds_per_step / q.m.seconds_per_step);
       } else if (q.space == "euclidean" && q.dim == 3 && q.method == r.method && q.m.threads == r.m.threads &&
@@ -273,6 +296,23 @@ void print_summary(const std::vector<Row>& rows) {
     }
     std::printf("\n");
   }
+  bool topology = false;
+  for (const Row& r : rows) topology = topology || !r.topology.empty();
+  if (!topology) return;
+  std::printf("\nseconds per body-step (seconds per step / N):\n");
+  for (const Row& r : rows) {
+    if (r.topology.empty() && r.space != "lammps") continue;
+    std::printf("  %7d bodies %-10s %d %-15s %d thr %-8s %.4g us\n", r.bodies, r.space.c_str(), r.dim,
+                r.method.c_str(), r.m.threads, r.topology.c_str(), r.m.seconds_per_step / r.bodies * 1e6);
+  }
+}
+
+std::vector<int> parse_genera(const std::string& text) {
+  std::vector<int> out;
+  for (const long g : parse_list(text, "--genus", 2, sesi::HyperbolicSurface<double>::max_genus)) {
+    out.push_back(static_cast<int>(g));
+  }
+  return out;
 }
 
 }  // namespace
@@ -295,6 +335,20 @@ int scaling_command(const BenchOptions& o) {
   }
   base.potential = o.potential;
   const std::vector<double> distances = parse_distances(o.center_distances.empty() ? "0" : o.center_distances);
+  // Topologies (issue #26): --box on E^n, --genus on H^2; Lennard-Jones only (the program refuses
+  // long-range terms on a quotient), chart methods only (it refuses the embedding methods there).
+  const std::vector<int> genera = o.genera.empty() ? std::vector<int>{} : parse_genera(o.genera);
+  if (o.box && base.space != SpaceKind::euclidean) throw InputError("--box: only on --space euclidean");
+  if (!genera.empty() && (base.space != SpaceKind::hyperbolic || base.dim != 2)) {
+    throw InputError("--genus: only on --space hyperbolic --dim 2");
+  }
+  const bool topology = o.box || !genera.empty();
+  if (topology && base.potential != "lennard-jones") {
+    throw InputError("--box, --genus: with --potential lennard-jones only (no long-range terms on a topology)");
+  }
+  if (topology && (distances.size() != 1 || distances[0] != 0)) {
+    throw InputError("--center-distance: not with --genus (the bodies fill the surface)");
+  }
   if (base.space != SpaceKind::hyperbolic && (distances.size() != 1 || distances[0] != 0)) {
     throw InputError("--center-distance: only on --space hyperbolic");
   }
@@ -306,6 +360,9 @@ int scaling_command(const BenchOptions& o) {
   const std::vector<long> threads = parse_list(o.threads.empty() ? "0" : o.threads, "--threads", 0, 1024);
   const std::vector<std::string> methods = parse_names(o.methods.empty() ? "sesi2" : o.methods);
   for (const std::string& method : methods) {
+    if (topology && is_embedded_method(method)) {
+      throw InputError("--methods: '" + method + "' does not run on a topology (--box, --genus); take a sesi method");
+    }
     if (base.space == SpaceKind::euclidean && is_embedded_method(method)) {
       throw InputError("--methods: '" + method + "' runs on curved spaces only (--space sphere or hyperbolic)");
     }
@@ -328,6 +385,11 @@ int scaling_command(const BenchOptions& o) {
   std::fprintf(csv, "# pairs_per_step: pairs within the cutoff (all pairs for gravity) x force evaluations per step\n");
   std::fprintf(csv, "# sesi2+langevin, sesi2+nose-hoover (with sesi2): the sesi2 step with a thermostat's stages (issue #25; "
                     "kT = 1, the scene's; langevin gamma = 1; nose-hoover tau = 0.5, chain 3), timed like the NVE rows\n");
+  if (topology) {
+    std::fprintf(csv, "# topology (issue #26): box = a periodic box of E^n, genus G = the compact surface of H^2 at the same "
+                      "density; lammps rows: LAMMPS (lmp, mpirun -np threads) on the box's bodies, its own Loop time per "
+                      "step (peak_rss_mb not measured)\n");
+  }
   if (rounds > 1) {
     std::fprintf(csv, "# seconds_per_step and peak_rss_mb: minimum over %d rounds, each round timing every point of an N "
                  "once in turn\n", rounds);
@@ -340,7 +402,7 @@ int scaling_command(const BenchOptions& o) {
   std::fprintf(csv, "# build: NOT optimised (no NDEBUG): timings are not representative\n");
 #endif
   std::fprintf(csv, "n_bodies,space,dim,potential,method,threads,seconds_per_step,pairs_per_step,ns_per_pair,peak_rss_mb,"
-                    "center_distance\n");
+                    "center_distance,topology\n");
 
   std::printf("sesi bench --scaling: %s, dim %d, %s\n", o.space.c_str(), base.dim, base.potential.c_str());
   std::vector<Row> rows;
@@ -357,6 +419,7 @@ int scaling_command(const BenchOptions& o) {
       ScalingPoint scene;  ///< unused for the flat cell-list loop
       int threads;         ///< asked for (0: all cores)
       std::string thermostat = {};  ///< "" (NVE) or a kind of timed_thermostats
+      bool dropped = false;         ///< a LAMMPS row without LAMMPS
     };
     std::vector<Point> points;
     for (const std::string& method : methods) {
@@ -367,6 +430,33 @@ int scaling_command(const BenchOptions& o) {
         point.check_every = o.check_every;
         point.neighbour_skin = o.skin;
         point.method = method;
+        if (topology) {
+          // issue #26: the box (with LAMMPS rows below), or each genus and the E^2 box at the same N.
+          const auto add = [&](const ScalingPoint& q) {
+            points.push_back({{q.bodies, space_label(q.space), q.dim, q.potential, method, Measured{}, stages, 0,
+                               topology_label(q)},
+                              q, static_cast<int>(t)});
+          };
+          if (o.box) {
+            point.box = true;
+            add(point);
+            continue;
+          }
+          for (const int g : genera) {
+            point.genus = g;
+            add(point);
+          }
+          ScalingPoint flat = base;
+          flat.bodies = point.bodies;
+          flat.check_every = point.check_every;
+          flat.neighbour_skin = point.neighbour_skin;
+          flat.method = method;
+          flat.space = SpaceKind::euclidean;
+          flat.dim = 2;
+          flat.box = true;
+          add(flat);
+          continue;
+        }
         for (const double d : distances) {
           point.center_distance = d;
           points.push_back({{point.bodies, space_label(point.space), point.dim, point.potential, method,
@@ -396,13 +486,42 @@ int scaling_command(const BenchOptions& o) {
         }
       }
     }
-    if (lj) {
+    if (o.box) {
+      // LAMMPS on the same bodies, as many MPI ranks as sesi's threads (issue #26).
+      for (const long t : threads) {
+        ScalingPoint point = base;
+        point.bodies = static_cast<int>(n);
+        point.neighbour_skin = o.skin;
+        point.box = true;
+        points.push_back({{point.bodies, "lammps", point.dim, "lennard-jones", "velocity-verlet", Measured{}, 1, 0,
+                           "box"},
+                          point, static_cast<int>(t)});
+      }
+    } else if (lj && !topology) {
       points.push_back({{static_cast<int>(n), "flat-periodic", 3, "lennard-jones", "velocity-verlet",
                          Measured{}, 1, 0},
                         ScalingPoint{}, 1});
     }
     for (int round = 0; round < rounds; ++round) {
       for (Point& p : points) {
+        if (p.dropped) continue;
+        if (p.row.space == "lammps") {
+          const Scene scene = scaling_scene(p.scene);
+          const int ranks = p.threads > 0 ? p.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+          std::string why;
+          const std::optional<double> seconds = lammps_seconds_per_step(scene, ranks, warm, steps, why);
+          if (!seconds) {
+            std::printf("  no LAMMPS row: %s\n", why.c_str());
+            p.dropped = true;
+            continue;
+          }
+          Measured m;
+          m.seconds_per_step = *seconds;
+          m.threads = ranks;
+          m.pairs = pairs_within(scene, lj_cutoff);
+          if (round == 0 || m.seconds_per_step < p.row.m.seconds_per_step) p.row.m = m;
+          continue;
+        }
         const Measured m = p.row.space == "flat-periodic" ? in_child([&] {
           Measured out;
           out.threads = 1;
@@ -416,6 +535,7 @@ int scaling_command(const BenchOptions& o) {
       }
     }
     for (const Point& p : points) {
+      if (p.dropped) continue;
       rows.push_back(p.row);
       write_row(csv, rows.back());
     }

@@ -3,8 +3,10 @@
 /// `sesi bench --scaling` (issue #11, docs/benchmarks.md): seconds per step of `sesi run`'s own
 /// loop (default checks and cadence) against the number of bodies, with, in the same run, the
 /// same bodies on flat E^3 through sesi's Euclidean path and a plain flat 3-D Lennard-Jones
-/// cell-list loop, so that every figure can be read as a ratio. Each point runs in a child
-/// process, so that its peak resident memory is its own. Writes DIR/scaling.csv.
+/// cell-list loop, so that every figure can be read as a ratio; with --box (E^n) LAMMPS on the
+/// same bodies, with --genus (H^2) the compact surfaces and the E^2 box at the same N (issue
+/// #26). Each point runs in a child process, so that its peak resident memory is its own.
+/// Writes DIR/scaling.csv.
 
 #include "bench_command.hpp"
 

@@ -1,8 +1,15 @@
 #include "bench_scaling_scenes.hpp"
 
+#include <unistd.h>
+
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -180,6 +187,87 @@ Eigen::MatrixXd separated_points(const SpaceSpec& space, int bodies, double exte
   return X;
 }
 
+/// Random sequential addition in the periodic box [0, L)^n: uniform points, each kept when no
+/// kept point's minimum image is within 1 sigma (cells of side L / floor(L) >= 1, wrapping).
+Eigen::MatrixXd box_points(int dim, int bodies, double L, Deviates& random) {
+  const int period = std::max(1, static_cast<int>(L));
+  const auto draw = [&]() -> Eigen::VectorXd {
+    Eigen::VectorXd x(dim);
+    for (int k = 0; k < dim; ++k) x(k) = L * random.uniform();
+    return x;
+  };
+  const auto key = [](const Eigen::VectorXd& x) -> Eigen::VectorXd { return x; };
+  const auto too_close = [L](const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+    Eigen::VectorXd d = x - y;
+    for (Eigen::Index k = 0; k < d.size(); ++k) d(k) -= L * std::nearbyint(d(k) / L);
+    return d.squaredNorm() < 1.0;
+  };
+  const auto points = sequential_addition(bodies, draw, key, too_close, L / period, period);
+  Eigen::MatrixXd X(dim, bodies);
+  for (int b = 0; b < bodies; ++b) X.col(b) = points[static_cast<std::size_t>(b)];
+  return X;
+}
+
+/// Random sequential addition in the fundamental polygon D of a compact surface: uniform points of
+/// the geodesic disc of D's circumradius, kept when inside D and when no kept point lies within
+/// 1 sigma of the point or of its images within 1 sigma of D (images_near), found through a hash
+/// of cells over the spatial coordinates (x1, x2): a Minkowski chord c moves them by at most
+/// c cosh(u) within u radii of the origin, and every point looked at lies within circumradius +
+/// 1 sigma of it.
+Eigen::MatrixXd surface_points(const SpaceSpec& space, int bodies, Deviates& random) {
+  const sesi::HyperbolicSurface<double> surface(space.genus, space.radius);
+  const double R = space.radius, reach = 1.0;
+  const double extent = surface.circumradius() / R;
+  const double chord = 2 * R * std::sinh(0.5 / R);  // Minkowski chord of geodesic distance 1
+  const double cell = chord * std::cosh(extent + reach / R);
+  std::unordered_map<std::uint64_t, std::vector<int>> cells;
+  const auto cell_of = [cell](const Eigen::Vector3d& y) {
+    return std::array<long, 2>{static_cast<long>(std::floor(y(0) / cell)), static_cast<long>(std::floor(y(1) / cell))};
+  };
+  const auto hash = [](long a, long b) {
+    return (0x9e3779b97f4a7c15ull ^ static_cast<std::uint64_t>(a)) * 0x100000001b3ull ^ static_cast<std::uint64_t>(b);
+  };
+  std::vector<Eigen::Vector3d> kept;
+  kept.reserve(static_cast<std::size_t>(bodies));
+  std::vector<int> near;
+  for (int b = 0; b < bodies; ++b) {
+    for (long trial = 0;; ++trial) {
+      if (trial == 10'000'000) throw std::runtime_error("sesi bench --scaling: no room for the bodies");
+      const Eigen::Vector3d x = random_point(space, extent, random);
+      if (surface.outside(x) > 0) continue;
+      near.assign(1, 0);
+      surface.images_near(x, reach, near);
+      bool fits = true;
+      for (std::size_t m = 0; m < near.size() && fits; ++m) {
+        if (m > 0 && near[m] == 0) continue;  // the identity, looked at first
+        Eigen::Vector3d y = x;
+        if (near[m] != 0) surface.apply(near[m], y);
+        const auto home = cell_of(y);
+        for (long dx = -1; dx <= 1 && fits; ++dx)
+          for (long dy = -1; dy <= 1 && fits; ++dy) {
+            const auto found = cells.find(hash(home[0] + dx, home[1] + dy));
+            if (found == cells.end()) continue;
+            for (const int j : found->second) {
+              const Eigen::Vector3d d = y - kept[static_cast<std::size_t>(j)];
+              if (d.head<2>().squaredNorm() - d(2) * d(2) < chord * chord) {
+                fits = false;
+                break;
+              }
+            }
+          }
+      }
+      if (!fits) continue;
+      const auto home = cell_of(x);
+      cells[hash(home[0], home[1])].push_back(b);
+      kept.push_back(x);
+      break;
+    }
+  }
+  Eigen::MatrixXd X(3, bodies);
+  for (int b = 0; b < bodies; ++b) X.col(b) = kept[static_cast<std::size_t>(b)];
+  return X;
+}
+
 /// The Fibonacci lattice of S^2 (equal areas along z, consecutive points a golden angle apart).
 Eigen::MatrixXd fibonacci_sphere(int bodies, double R) {
   Eigen::MatrixXd X(3, bodies);
@@ -216,10 +304,29 @@ Eigen::VectorXd tangent_velocity(const SpaceSpec& space, const Eigen::VectorXd& 
   return v;
 }
 
+/// A unit-temperature velocity at x on H^2 (radius R) for bodies far from the origin: normal
+/// components along the Lorentz-orthonormal tangent frame e_r = (cosh u cos phi, cosh u sin phi,
+/// sinh u), e_phi = (-sin phi, cos phi, 0) at x = R (sinh u cos phi, sinh u sin phi, cosh u).
+/// (tangent_velocity projects an ambient normal vector, whose speed grows as cosh u there.)
+Eigen::VectorXd surface_velocity(const Eigen::VectorXd& x, double R, Deviates& random) {
+  const double a = random.normal(), b = random.normal();
+  const double rho = std::hypot(x(0), x(1));  // R sinh u
+  const double c = rho > 0 ? x(0) / rho : 1.0, s = rho > 0 ? x(1) / rho : 0.0;
+  Eigen::VectorXd v(3);
+  v << a * (x(2) / R) * c - b * s, a * (x(2) / R) * s + b * c, a * rho / R;
+  return v;
+}
+
 }  // namespace
 
 double scaling_radius(int dim, int bodies) {
   return std::pow(bodies / density / unit_sphere_area(dim + 1), 1.0 / dim);
+}
+
+double box_edge(int dim, int bodies) { return std::pow(bodies / density, 1.0 / dim); }
+
+double surface_radius(int genus, int bodies) {
+  return std::sqrt(bodies / density / (4.0 * std::numbers::pi * (genus - 1)));
 }
 
 Scene scaling_scene(const ScalingPoint& point, std::uint64_t seed) {
@@ -229,11 +336,20 @@ Scene scaling_scene(const ScalingPoint& point, std::uint64_t seed) {
   scene.space.kind = point.space;
   scene.space.dim = point.dim;
   scene.space.radius = point.space == SpaceKind::euclidean ? 1.0 : scaling_radius(point.dim, point.bodies);
+  if (point.box) scene.space.box.assign(static_cast<std::size_t>(point.dim), box_edge(point.dim, point.bodies));
+  if (point.genus != 0) {
+    scene.space.genus = point.genus;
+    scene.space.radius = surface_radius(point.genus, point.bodies);
+  }
   const double R = scene.space.radius;
   Deviates random(seed);
 
   Eigen::MatrixXd X;
-  switch (point.space) {
+  if (point.box) {
+    X = box_points(point.dim, point.bodies, scene.space.box[0], random);
+  } else if (point.genus != 0) {
+    X = surface_points(scene.space, point.bodies, random);
+  } else switch (point.space) {
     case SpaceKind::sphere:
       X = point.dim == 2 ? fibonacci_sphere(point.bodies, R) : separated_points(scene.space, point.bodies, 0, random);
       break;
@@ -249,7 +365,10 @@ Scene scaling_scene(const ScalingPoint& point, std::uint64_t seed) {
   }
   const bool gravity = point.potential == "cotangent-gravity";
   Eigen::MatrixXd V(X.rows(), X.cols());
-  for (int b = 0; b < point.bodies; ++b) V.col(b) = tangent_velocity(scene.space, X.col(b), gravity ? 0.1 : 1.0, random);
+  for (int b = 0; b < point.bodies; ++b) {
+    V.col(b) = point.genus != 0 ? surface_velocity(X.col(b), R, random)
+                                : tangent_velocity(scene.space, X.col(b), gravity ? 0.1 : 1.0, random);
+  }
   if (point.space == SpaceKind::hyperbolic && point.center_distance != 0) {
     boost(X, point.center_distance);  // an isometry: the velocities go along
     boost(V, point.center_distance);
@@ -271,6 +390,10 @@ Scene scaling_scene(const ScalingPoint& point, std::uint64_t seed) {
   scene.integrator.t_end = 0.0;
   scene.integrator.check_every = point.check_every;
   scene.integrator.neighbour_skin = point.neighbour_skin;
+  // The placement by minimum image in the domain, checked by the program's own search.
+  if (point.box || point.genus != 0) {
+    if (pairs_within(scene, 0.999) != 0) throw std::logic_error("sesi bench --scaling: bodies placed too close");
+  }
   return scene;
 }
 
@@ -288,9 +411,9 @@ namespace {
 /// The plain flat loop's bodies in a periodic cube of side L (unit masses), kept sorted by cell
 /// (a counting sort every step, so that a cell's bodies are contiguous in memory, as MD codes
 /// do) with cells of side >= the cutoff, at least 3 per side (below that, one cell).
-class PeriodicBox {
+class PlainBox {
  public:
-  PeriodicBox(std::vector<double> x, std::vector<double> v, double side, double cutoff)
+  PlainBox(std::vector<double> x, std::vector<double> v, double side, double cutoff)
       : n_(static_cast<int>(x.size() / 3)), L_(side), x_(std::move(x)), v_(std::move(v)), a_(x_.size(), 0.0) {
     cells_ = std::max(1, static_cast<int>(side / cutoff));
     if (cells_ < 3) cells_ = 1;
@@ -419,12 +542,106 @@ double flat_cell_list_seconds_per_step(int bodies, long steps, long& pairs) {
   for (int b = 0; b < bodies; ++b)
     for (int k = 0; k < 3; ++k) x[3 * static_cast<std::size_t>(b) + k] = points[static_cast<std::size_t>(b)](k);
   for (double& c : v) c = random.normal();
-  PeriodicBox box(std::move(x), std::move(v), L, lj_cutoff);
+  PlainBox box(std::move(x), std::move(v), L, lj_cutoff);
   box.forces(rc2);
   box.step(dt, rc2);  // warm caches
   const auto start = std::chrono::steady_clock::now();
   for (long s = 0; s < steps; ++s) pairs = box.step(dt, rc2);
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / static_cast<double>(steps);
+}
+
+namespace {
+
+/// The first executable `name` on PATH, or "".
+std::string on_path(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (dir.empty()) continue;
+    const std::string candidate = dir + "/" + name;
+    if (access(candidate.c_str(), X_OK) == 0) return candidate;
+  }
+  return {};
+}
+
+}  // namespace
+
+std::optional<double> lammps_seconds_per_step(const Scene& scene, int ranks, long warm, long steps, std::string& why) {
+  const int dim = scene.space.dim;
+  if (scene.space.kind != SpaceKind::euclidean || scene.space.box.empty() || (dim != 2 && dim != 3)) {
+    why = "LAMMPS rows need a periodic box of E^2 or E^3";
+    return std::nullopt;
+  }
+  const std::string lmp = on_path("lmp"), mpirun = ranks > 1 ? on_path("mpirun") : std::string();
+  if (lmp.empty() || (ranks > 1 && mpirun.empty())) {
+    why = lmp.empty() ? "no LAMMPS program lmp on PATH (Debian: lammps)" : "no mpirun on PATH (Debian: openmpi-bin)";
+    return std::nullopt;
+  }
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("sesi-scaling-lammps-" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream data(dir / "system.data");
+    data.precision(17);
+    data << "sesi bench --scaling\n\n" << scene.body_count() << " atoms\n1 atom types\n\n";
+    for (int k = 0; k < 3; ++k) {
+      const char axis = "xyz"[k];
+      if (k < dim) data << "0 " << scene.space.box[static_cast<std::size_t>(k)];
+      else data << "-0.5 0.5";
+      data << ' ' << axis << "lo " << axis << "hi\n";
+    }
+    data << "\nMasses\n\n1 1\n\nAtoms # atomic\n\n";
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+      const Body& body = scene.bodies[b];
+      data << b + 1 << " 1";
+      for (int k = 0; k < 3; ++k) data << ' ' << (k < dim ? body.q(k) : 0.0);
+      data << '\n';
+    }
+    data << "\nVelocities\n\n";
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+      const Body& body = scene.bodies[b];
+      data << b + 1;
+      for (int k = 0; k < 3; ++k) data << ' ' << (k < dim ? body.p(k) / body.mass : 0.0);
+      data << '\n';
+    }
+    std::ofstream in(dir / "in.lammps");
+    in.precision(17);
+    in << "units lj\ndimension " << dim << "\nboundary p p p\natom_style atomic\nread_data "
+       << (dir / "system.data").string() << "\npair_style lj/cut " << lj_cutoff << "\npair_coeff * * 1 1 " << lj_cutoff
+       << "\npair_modify shift yes\nneighbor " << lj_cutoff * scene.integrator.neighbour_skin
+       << " bin\nneigh_modify every 1 delay 0 check yes\nfix integrate all nve\n"
+       << (dim == 2 ? "fix plane all enforce2d\n" : "") << "timestep " << *scene.integrator.dt
+       << "\nthermo_style custom step pe ke\nthermo_modify norm no\nthermo 1000000000\nrun " << warm << "\nrun "
+       << steps << "\n";
+  }
+  std::string command = "OMP_NUM_THREADS=1 ";
+  if (ranks > 1) {
+    command += mpirun + " -np " + std::to_string(ranks) + (geteuid() == 0 ? " --allow-run-as-root" : "") + " ";
+  }
+  command += lmp + " -nocite -screen none -in " + (dir / "in.lammps").string() + " -log " + (dir / "log.lammps").string() +
+             " > " + (dir / "out.txt").string() + " 2>&1";
+  const int status = std::system(command.c_str());
+  std::optional<double> out;
+  std::ifstream log(dir / "log.lammps");
+  std::string line;
+  double loop = -1;
+  long loop_steps = 0;
+  while (std::getline(log, line)) {
+    // "Loop time of 1.234 on 2 procs for 40 steps with 100000 atoms": the last run's.
+    if (line.rfind("Loop time of ", 0) != 0) continue;
+    std::istringstream words(line.substr(13));
+    std::string on, procs, for_, steps_word;
+    int p = 0;
+    words >> loop >> on >> p >> procs >> for_ >> loop_steps;
+  }
+  if (status != 0 || loop < 0 || loop_steps != steps) {
+    why = "LAMMPS failed (" + command + ", exit status " + std::to_string(status) + ")";
+  } else {
+    out = loop / static_cast<double>(steps);
+  }
+  std::filesystem::remove_all(dir);
+  return out;
 }
 
 }  // namespace sesi::program::bench

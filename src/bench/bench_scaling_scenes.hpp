@@ -7,6 +7,7 @@
 /// cell-list loop.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "scene.hpp"
@@ -23,6 +24,10 @@ struct ScalingPoint {
   double center_distance = 0;  ///< H^n: the cluster's centre this many radii from the origin
   long check_every = 0;        ///< the run's check cadence (0: sesi run's default)
   double neighbour_skin = sesi::default_skin_fraction;
+  /// Topologies (issue #26). E^n: a periodic box of edge (N / density)^(1/n) (SpaceSpec::box);
+  /// H^2: genus g >= 2, the compact surface of area N / density, R = (N / (4 pi (g - 1) density))^(1/2).
+  bool box = false;
+  int genus = 0;
 };
 
 /// Lennard-Jones of the scaling scenes: epsilon = sigma = 1, cutoff 2.5 sigma, dt 0.002.
@@ -32,11 +37,16 @@ inline constexpr double gravity_dt = 0.01;
 
 /// The radius of S^n holding `bodies` at density 1/2; the scaling scenes on H^n use it too.
 double scaling_radius(int dim, int bodies);
+/// The edge of the periodic box of E^n holding `bodies` at density 1/2.
+double box_edge(int dim, int bodies);
+/// The radius R of the genus-g surface holding `bodies` at density 1/2: area 4 pi (g - 1) R^2.
+double surface_radius(int genus, int bodies);
 
 /// The scene of a point. S^2: a Fibonacci lattice; H^2: the same spiral on a geodesic disc
 /// (equal areas), moved center_distance radii away by a boost; other S^n, H^n (a geodesic ball)
 /// and E^n (a cube): random sequential addition, uniform points each kept when no kept point
-/// is within 1 sigma. Velocities: normal deviates projected on the tangent
+/// is within 1 sigma; a periodic box or a compact surface: the same in the fundamental domain,
+/// with the minimum-image distance. Velocities: normal deviates projected on the tangent
 /// space, unit temperature for Lennard-Jones, 0.1 for gravity. t_end = 0: the caller sets it.
 Scene scaling_scene(const ScalingPoint& point, std::uint64_t seed = 1);
 
@@ -49,5 +59,14 @@ long pairs_within(const Scene& scene, double cutoff);
 /// (half of the neighbour cells), one thread. Returns the seconds per step over `steps` steps
 /// and sets `pairs` to the pairs within the cutoff at the end.
 double flat_cell_list_seconds_per_step(int bodies, long steps, long& pairs);
+
+/// LAMMPS (the program `lmp`, issue #26) on the bodies of a scene in a periodic box of E^2 or E^3
+/// (scaling_scene with box): the same Lennard-Jones (lj/cut 2.5, pair_modify shift yes), skin
+/// (neighbor bin, cutoff x neighbour_skin; neigh_modify every 1 delay 0 check yes) and velocity
+/// Verlet step (fix nve, dt), on `ranks` MPI ranks (mpirun -np ranks when ranks > 1). Seconds per
+/// step: LAMMPS' own "Loop time" of a run of `steps` steps after a run of `warm` steps, with
+/// thermo output only at the ends. Returns nothing, with `why` set, when lmp (or mpirun) is not
+/// found or the run fails.
+std::optional<double> lammps_seconds_per_step(const Scene& scene, int ranks, long warm, long steps, std::string& why);
 
 }  // namespace sesi::program::bench

@@ -121,8 +121,9 @@ CLI::App* add_analyze_subcommand(CLI::App& app, AnalyzeOptions& options) {
       ->type_name("DIR")
       ->required();
   a->add_option("--rdf-max", options.rdf_max,
-                "Largest geodesic distance of g(r) (default: pi R on S^n, elsewhere a quarter of the bodies' "
-                "extent in the first frame read; at most ten mean spacings (V/N)^(1/n)).")
+                "Largest geodesic distance of g(r) (default: pi R on S^n, the largest allowed cutoff on a periodic "
+                "box or compact surface (also the most it may be), elsewhere a quarter of the bodies' extent in the "
+                "first frame read; at most ten mean spacings (V/N)^(1/n)).")
       ->type_name("R");
   a->add_option("--bins", options.bins, "Bins of g(r) over [0, R), 1 to 10^6 (default 100).")->type_name("N");
   a->add_option("--from", options.from, "First time read (default: the first frame).")->type_name("T");
@@ -235,7 +236,9 @@ int analyze_command(const AnalyzeOptions& options) {
   const double saturation = analysis::msd_saturation(space);
   bool pictures = false;
   if (options.picture) {
-    const std::string title = std::string(space_name(space.kind)) + " dim " + std::to_string(space.dim);
+    std::string title = std::string(space_name(space.kind)) + " dim " + std::to_string(space.dim);
+    if (!space.box.empty()) title += ", periodic box";
+    if (space.genus != 0) title += ", genus " + std::to_string(space.genus);
     const fs::path rdf_tmp = dir / "rdf.png.tmp", msd_tmp = dir / "msd.png.tmp";
     const int status = draw({(dir / "rdf.csv").string(), (dir / "msd.csv").string(),
                              velocities ? (dir / "vacf.csv").string() : std::string(), rdf_tmp.string(),
@@ -257,9 +260,16 @@ int analyze_command(const AnalyzeOptions& options) {
   if (!options.quiet) {
     std::printf("%s: %zu frames from t = %s to %s, %d bodies\n", dir.string().c_str(), frames.t.size(),
                 format_number(frames.t.front()).c_str(), format_number(frames.t.back()).c_str(), frames.bodies());
-    std::printf("  rdf.csv   g(r) over [0, %s) in %d bins, %ld shell centres\n", format_number(r_max).c_str(),
+    std::printf("  rdf.csv   g(r) over [0, %s) in %d bins, %ld shell centres", format_number(r_max).c_str(),
                 options.bins, rdf.centres());
-    std::printf("  msd.csv   lags 0 to %zu frames", m.value.size() - 1);
+    if (space.has_topology()) {
+      std::printf(" (minimum image on this %s; largest allowed cutoff %s)", space.box.empty() ? "surface" : "box",
+                  format_number(analysis::max_cutoff(space)).c_str());
+    }
+    std::printf("\n  msd.csv   lags 0 to %zu frames", m.value.size() - 1);
+    if (space.has_topology()) {
+      std::printf(" of the unwrapped positions (%s)", space.box.empty() ? "words" : "image counts");
+    }
     if (!std::isnan(saturation)) std::printf("; saturates at %s on this sphere", format_short(saturation).c_str());
     std::printf("\n");
     if (velocities) {

@@ -109,6 +109,7 @@ void apply_overrides(Scene& scene, const RunOptions& options) {
   const bool method_flag = options.method || options.tolerance;  // --tolerance means --method auto
   check_thermostat_method(scene, method_flag ? option : file,
                           options.method ? "--method" : options.tolerance ? "--tolerance" : "integrator.method");
+  check_topology_method(scene, options.method ? option : file, options.method ? "--method" : "integrator.method");
   if (in.method == "auto") {
     if (!in.tolerance) {
       throw InputError(file, "integrator.tolerance",

@@ -4,8 +4,11 @@
 /// system, one composition engine (and one thermostatted engine, for a scene with a
 /// [thermostat]: thermostat_stepper.hpp), and the diagnostics of the framed state.
 
+#include <algorithm>
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
+#include <variant>
 #include <vector>
 
 #include <sesi/diagnostics.hpp>
@@ -14,6 +17,7 @@
 #include <sesi/spaces/euclidean.hpp>
 #include <sesi/spaces/hyperbolic.hpp>
 #include <sesi/spaces/sphere.hpp>
+#include <sesi/topology.hpp>
 
 #include "integrator.hpp"
 #include "methods.hpp"
@@ -22,10 +26,21 @@
 
 namespace sesi::program {
 
-/// The chart of a scene's space as Chart (whose dimension must match the scene's).
+/// The chart of a scene's space as Chart (whose dimension must match the scene's); on a space with
+/// a topology the Quotient of the covering chart by the scene's box or surface (topology.hpp).
 template <class Chart>
 Chart make_chart(const SpaceSpec& space) {
-  if constexpr (std::is_constructible_v<Chart, double, int>) {
+  if constexpr (sesi::HasTopology<Chart>) {
+    using Topo = typename Chart::Topology;
+    auto cover = make_chart<typename Chart::Cover>(space);
+    if constexpr (requires { typename Topo::Word; }) {
+      return Chart(std::move(cover), Topo(space.genus, space.radius));  // a compact surface H^2/Gamma
+    } else {
+      const typename Topo::Vector edges =
+          Eigen::Map<const Eigen::VectorXd>(space.box.data(), static_cast<Eigen::Index>(space.box.size()));
+      return Chart(std::move(cover), Topo(edges));  // a periodic box
+    }
+  } else if constexpr (std::is_constructible_v<Chart, double, int>) {
     return Chart(space.radius, space.dim);  // S^n, H^n
   } else {
     return Chart(space.dim);  // E^n
@@ -43,14 +58,56 @@ sesi::State<Chart> initial_state(const Scene& scene) {
   return x;
 }
 
+/// A topology's image record (Topology::Images), or nothing for a chart without one.
+template <class Chart>
+struct ImagesOf {
+  using type = std::monostate;
+};
+template <sesi::HasTopology Chart>
+struct ImagesOf<Chart> {
+  using type = typename Chart::Topology::Images;
+};
+
+/// How far a body may leave the domain before the bodies are reduced into it (sesi::wrap's
+/// margin): a quarter of the longest cutoff of the scene's short-range terms, or of the
+/// topology's largest allowed cutoff without any. Rare reductions keep the kept gradient and
+/// the Verlet lists valid between them; the neighbour structures allow for the slack.
+inline double wrap_margin(const Scene& scene, double max_cutoff) {
+  double range = 0.0;
+  for (const PotentialSpec& spec : scene.potentials) {
+    if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) range = std::max(range, lj->cutoff);
+  }
+  return 0.25 * (range > 0.0 ? range : max_cutoff);
+}
+
 template <class Chart>
 class ChartIntegrator final : public Integrator {
+  static constexpr bool topology = sesi::HasTopology<Chart>;
+  /// A compact surface (group words), not a box (image counts).
+  static constexpr bool surface = [] {
+    if constexpr (topology) {
+      return requires { typename Chart::Topology::Word; };
+    } else {
+      return false;
+    }
+  }();
+
  public:
   explicit ChartIntegrator(const Scene& scene)
       : sys_(make_system(scene, make_chart<Chart>(scene.space))),
         x_(initial_state<Chart>(scene)),
         stepper_(make_chart_stepper(scene)) {
     if constexpr (sesi::ClusterChart<Chart>) enter_cluster_frame(scene);
+    if constexpr (topology) {
+      // Bodies given anywhere start in the domain (every one outside it, by any amount, even on
+      // the far face of a box: a margin below 0), with their images at the identity: the
+      // unwrapped positions start where they are.
+      const auto& topo = sys_.chart().topology();
+      images_ = topo.identity_images(x_.bodies());
+      sesi::wrap(sys_, x_, images_, -1.0);
+      images_ = topo.identity_images(x_.bodies());
+      margin_ = wrap_margin(scene, topo.max_cutoff());
+    }
     // A body that starts near a singular set of the scene's chart is re-charted before the first
     // step, as after every step: else that step runs in the singular chart (on S^9 a body at
     // sin q_8 = 0.11 turns its last angle by 0.9 rad in one step of 0.01, and sesi8-kahan-li
@@ -66,6 +123,7 @@ class ChartIntegrator final : public Integrator {
 
   void step(double t, double h) override {
     stepper_->step(x_, t, h);
+    if constexpr (topology) sesi::wrap(sys_, x_, images_, margin_);  // a thermostat's step too
     shown_valid_ = false;
     if (dt_ == 0.0) dt_ = h;  // a processed method's step, when the scene has none
   }
@@ -126,6 +184,32 @@ class ChartIntegrator final : public Integrator {
     return world;
   }
   Eigen::MatrixXd velocities() override { return sesi::embedding_velocities(sys_, shown()); }
+  Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic> image_counts() const override {
+    if constexpr (topology && !surface) return images_;
+    return {};
+  }
+  std::vector<std::vector<std::int16_t>> words() const override {
+    if constexpr (surface) return {images_.begin(), images_.end()};
+    return {};
+  }
+  /// x_b + L .* n_b on a box (exact in the counts), W_b x_b on a surface (Sausset & Tarjus 2007:
+  /// the group element that took the body back, applied to its point in the domain).
+  Eigen::MatrixXd unwrapped_points() override {
+    Eigen::MatrixXd x = points();
+    if constexpr (surface) {
+      const auto& topo = sys_.chart().topology();
+      for (Eigen::Index b = 0; b < x.cols(); ++b) {
+        const auto& word = images_[static_cast<std::size_t>(b)];
+        if (!word.empty()) x.col(b) = topo.element(word) * x.col(b);
+      }
+    } else if constexpr (topology) {
+      const auto& L = sys_.chart().topology().edges();
+      for (Eigen::Index b = 0; b < x.cols(); ++b) {
+        for (Eigen::Index k = 0; k < x.rows(); ++k) x(k, b) += L[k] * static_cast<double>(images_(k, b));
+      }
+    }
+    return x;
+  }
   int body_with_non_finite_energy() override {
     const sesi::State<Chart>& x = shown();
     typename Chart::Point q(sys_.dim()), p(sys_.dim());
@@ -208,13 +292,17 @@ class ChartIntegrator final : public Integrator {
     }
     return shown_;
   }
-  static FramedState framed(const sesi::State<Chart>& x) {
+  /// x as a FramedState, with the topology's image record (images_: a topology's integrator
+  /// runs no processed method, so x is x_).
+  FramedState framed(const sesi::State<Chart>& x) const {
     FramedState out;
     out.q = x.q;
     out.p = x.p;
     out.clustered = x.clustered;
     out.frames.assign(x.frames.begin(), x.frames.end());
     if (x.clustered) out.cluster = x.cluster;
+    out.image_counts = image_counts();
+    out.words = words();
     return out;
   }
   /// x_ <- state, a chart method's state of this scene's size (anything else is a caller's
@@ -233,12 +321,33 @@ class ChartIntegrator final : public Integrator {
                 (!state.clustered || square(state.cluster));
     for (const Eigen::MatrixXd& f : state.frames) fits = fits && square(f);
     if constexpr (!sesi::ClusterChart<Chart>) fits = fits && !state.clustered;
+    // The image record: of this topology's kind and size, or none (the images start at the identity).
+    const std::size_t bodies = static_cast<std::size_t>(x_.bodies());
+    if constexpr (surface) {
+      fits = fits && state.image_counts.size() == 0 && (state.words.empty() || state.words.size() == bodies);
+    } else if constexpr (topology) {
+      fits = fits && state.words.empty() &&
+             (state.image_counts.size() == 0 ||
+              (state.image_counts.rows() == x_.q.rows() && state.image_counts.cols() == x_.q.cols()));
+    } else {
+      fits = fits && state.image_counts.size() == 0 && state.words.empty();
+    }
     if (!fits) throw std::logic_error("the chart state to restore has the wrong size");
     x_.q = state.q;
     x_.p = state.p;
     x_.frames.assign(state.frames.begin(), state.frames.end());
     x_.clustered = state.clustered;
     if (state.clustered) x_.cluster = state.cluster;
+    if constexpr (surface) {
+      images_ = state.words.empty() ? sys_.chart().topology().identity_images(x_.bodies())
+                                    : typename ImagesOf<Chart>::type(state.words.begin(), state.words.end());
+    } else if constexpr (topology) {
+      if (state.image_counts.size() == 0) {
+        images_ = sys_.chart().topology().identity_images(x_.bodies());
+      } else {
+        images_ = state.image_counts;
+      }
+    }
     // A state without a thermostat's (an NVE run's) leaves this thermostat as it is: at its start.
     // Another integrator's (start_from: Python's sim.thermostat or sim.method changed) goes on
     // only if it is of the same shape (a chain's variables are not another kind's).
@@ -282,6 +391,9 @@ class ChartIntegrator final : public Integrator {
 
   SystemOf<Chart> sys_;
   sesi::State<Chart> x_;
+  // A topology: each body's image record (sesi::wrap) and the wrap's margin (wrap_margin).
+  typename ImagesOf<Chart>::type images_{};
+  double margin_ = 0.0;
   ThermostatStepper<SystemOf<Chart>>* thermostat_ = nullptr;  // stepper_, if thermostatted
   double schedule_jumps_ = 0.0;  // Nose-Hoover: the extended energy's jumps at kT changes (set_temperature)
   std::unique_ptr<AnyStepper<SystemOf<Chart>>> stepper_;  // refers to sys_

@@ -4,11 +4,17 @@
 
 #include "errors.hpp"
 #include "methods.hpp"
+#include "validate.hpp"
 
 namespace sesi::program {
 
 std::unique_ptr<Integrator> make_integrator(const Scene& scene) {
   const bool low = scene.dim() <= 4;
+  if (scene.space.has_topology()) {
+    // Every front end's scene (a file, --method, Python, a sweep, a checkpoint) comes through here.
+    check_topology_method(scene, Origin{scene.source, scene.integrator.line}, "integrator.method");
+    return topology_integrator(scene);
+  }
   if (is_embedded_method(scene.integrator.method)) {
     switch (scene.space.kind) {
       case SpaceKind::sphere:

@@ -24,6 +24,9 @@ std::unique_ptr<Integrator> hyperbolic_integrator_1_4(const Scene&);
 std::unique_ptr<Integrator> hyperbolic_integrator_5_up(const Scene&);
 std::unique_ptr<Integrator> euclidean_integrator_1_4(const Scene&);
 std::unique_ptr<Integrator> euclidean_integrator_5_up(const Scene&);
+// A space with a topology (SpaceSpec::has_topology): a periodic box on E^n (n = 1..3 fixed size,
+// Eigen::Dynamic above) or a compact surface H^2/Gamma, chart methods only (dispatch_topology.cpp).
+std::unique_ptr<Integrator> topology_integrator(const Scene&);
 // The geodesic methods (EmbeddedIntegrator), every dimension (dispatch_geodesic_<space>.cpp).
 std::unique_ptr<Integrator> sphere_geodesic_integrator(const Scene&);
 std::unique_ptr<Integrator> hyperbolic_geodesic_integrator(const Scene&);

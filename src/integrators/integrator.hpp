@@ -33,6 +33,11 @@ struct FramedState {
   /// variables; then the integrator's sum of Nose-Hoover's jumps at schedule changes), else
   /// empty. Nothing random: the noise is keyed by the seed and the step.
   std::vector<double> thermostat;
+  /// A topology's image record (sesi::wrap; api of include/sesi/topology.hpp), else empty: on a
+  /// periodic box the integer image counts (dim x bodies; unwrapped x_b + L .* n_b), on a compact
+  /// surface each body's group word W_b (letters: side indices 0..4g-1; unwrapped W_b x_b).
+  Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic> image_counts;
+  std::vector<std::vector<std::int16_t>> words;
 };
 
 class Integrator {
@@ -76,6 +81,17 @@ class Integrator {
   /// With a non-finite energy: the first body (1-based) whose kinetic energy or potential
   /// gradient is not finite, or 0.
   virtual int body_with_non_finite_energy() = 0;
+
+  // A space with a topology (SpaceSpec::has_topology): points() and read() give the bodies in the
+  // domain; these give where they went in the covering space. The defaults are a space's without one.
+
+  /// Periodic box: each body's integer image counts (dim x bodies); empty without a box.
+  virtual Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic> image_counts() const { return {}; }
+  /// Compact surface: each body's group word W_b (letters 0..4g-1, freely reduced); empty without one.
+  virtual std::vector<std::vector<std::int16_t>> words() const { return {}; }
+  /// World points in the universal cover (ambient x bodies): x_b + L .* n_b on a box, W_b x_b on a
+  /// surface, points() without a topology.
+  virtual Eigen::MatrixXd unwrapped_points() { return points(); }
 
   // A thermostatted run (Scene::thermostat; sesi::Thermostat, include/sesi/thermostat.hpp). The
   // defaults are a constant-energy integrator's: no thermostat, nothing to set, no heat.

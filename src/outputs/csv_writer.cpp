@@ -1,5 +1,6 @@
 #include "csv_writer.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -39,20 +40,54 @@ CsvWriter::~CsvWriter() {
 }
 
 void CsvWriter::row(std::span<const double> values) {
-  char* out = buffer_.data();
-  char* const end = buffer_.data() + buffer_.size();
-  for (std::size_t k = 0; k < values.size(); ++k) {
-    if (end - out < 32) {  // flush a long row in pieces
-      check(std::fwrite(buffer_.data(), 1, static_cast<std::size_t>(out - buffer_.data()), file_) ==
-            static_cast<std::size_t>(out - buffer_.data()));
-      out = buffer_.data();
-    }
-    if (k > 0) *out++ = ',';
-    out = std::to_chars(out, end, values[k]).ptr;
+  begin_row();
+  for (const double v : values) number(v);
+  end_row();
+}
+
+void CsvWriter::begin_row() {
+  used_ = 0;
+  first_cell_ = true;
+}
+
+void CsvWriter::flush_buffer() {
+  check(std::fwrite(buffer_.data(), 1, used_, file_) == used_);
+  used_ = 0;
+}
+
+void CsvWriter::cell(std::size_t bytes) {
+  if (buffer_.size() - used_ < bytes + 2) flush_buffer();  // a long row goes out in pieces
+  if (!first_cell_) buffer_[used_++] = ',';
+  first_cell_ = false;
+}
+
+void CsvWriter::number(double value) {
+  cell(32);  // the shortest round-trip form of a double takes at most 24 characters
+  used_ = static_cast<std::size_t>(std::to_chars(buffer_.data() + used_, buffer_.data() + buffer_.size(), value).ptr -
+                                   buffer_.data());
+}
+
+void CsvWriter::integer(std::int64_t value) {
+  cell(24);  // at most 20 characters
+  used_ = static_cast<std::size_t>(std::to_chars(buffer_.data() + used_, buffer_.data() + buffer_.size(), value).ptr -
+                                   buffer_.data());
+}
+
+void CsvWriter::text(std::string_view value) {
+  cell(std::min(value.size(), buffer_.size() / 2));
+  if (value.size() <= buffer_.size() - used_ - 1) {
+    std::copy(value.begin(), value.end(), buffer_.begin() + static_cast<std::ptrdiff_t>(used_));
+    used_ += value.size();
+  } else {  // longer than the buffer holds: straight to the file
+    flush_buffer();
+    check(std::fwrite(value.data(), 1, value.size(), file_) == value.size());
   }
-  *out++ = '\n';
-  const auto size = static_cast<std::size_t>(out - buffer_.data());
-  check(std::fwrite(buffer_.data(), 1, size, file_) == size);
+}
+
+void CsvWriter::end_row() {
+  if (used_ == buffer_.size()) flush_buffer();
+  buffer_[used_++] = '\n';
+  flush_buffer();
 }
 
 void CsvWriter::close() {

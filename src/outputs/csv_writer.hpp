@@ -1,13 +1,16 @@
 #pragma once
 /// @file csv_writer.hpp
 /// A buffered CSV file of numbers: a header row, then rows of doubles written in the shortest
-/// form that reads back exactly (std::to_chars). Write errors throw std::runtime_error.
+/// form that reads back exactly (std::to_chars). A row may also hold integers (written as
+/// integers) and text cells (a surface's words), built cell by cell. Write errors throw
+/// std::runtime_error.
 
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace sesi::program {
@@ -22,6 +25,13 @@ class CsvWriter {
   CsvWriter& operator=(const CsvWriter&) = delete;
 
   void row(std::span<const double> values);
+  /// A row cell by cell: begin_row, then number / integer / text in column order, then end_row.
+  /// number writes what row() writes; text is written as given (no comma, quote or newline in it).
+  void begin_row();
+  void number(double value);
+  void integer(std::int64_t value);
+  void text(std::string_view value);
+  void end_row();
   /// Flush, and the file's length in bytes (for a checkpoint).
   std::uint64_t flushed_bytes();
   /// Flush and close; throws if anything failed to reach the file.
@@ -29,9 +39,14 @@ class CsvWriter {
 
  private:
   void check(bool ok) const;
+  /// Room for `bytes` more in buffer_ (writing out what it holds if need be), and the separator.
+  void cell(std::size_t bytes);
+  void flush_buffer();
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
   std::vector<char> buffer_;
+  std::size_t used_ = 0;     ///< bytes of the row under construction in buffer_
+  bool first_cell_ = true;
 };
 
 }  // namespace sesi::program

@@ -123,9 +123,13 @@ struct Series {
 struct H5mdWriter::Impl {
   std::filesystem::path path;
   hsize_t bodies = 0, dim = 0, ambient = 0, frames = 0;
+  bool box = false;      ///< an E^n periodic box: particles/all/image
+  int sides = 0;         ///< an H^2 surface's polygon (4g): particles/all/unwrapped_position and word
   // Declared first, destroyed last: the file closes after its datasets.
-  Handle file, group_properties, dataset_properties;
+  Handle file, group_properties, dataset_properties, word_type;
   Series step, time, position, chart_position, chart_momentum, energy;
+  /// On a topology: the image counts (box), or the unwrapped points and words (surface).
+  Series image, unwrapped, word;
   /// A thermostatted run's observables (diagnostics.csv's columns), in thermostat_names' order.
   std::vector<Series> thermostat;
 
@@ -180,8 +184,10 @@ struct H5mdWriter::Impl {
               buffer.data());
   }
 
-  /// An empty time series, extensible along its first (frame) dimension.
-  Series series(hid_t group, const char* name, hid_t file_type, hid_t memory_type, std::vector<hsize_t> item) const {
+  /// An empty time series, extensible along its first (frame) dimension; compressed unless its
+  /// type is a variable-length one (whose heap the filters would not reach).
+  Series series(hid_t group, const char* name, hid_t file_type, hid_t memory_type, std::vector<hsize_t> item,
+                bool compress = true) const {
     const std::string what = std::string("creating dataset ") + name;
     std::vector<hsize_t> dims{0}, max_dims{H5S_UNLIMITED};
     dims.insert(dims.end(), item.begin(), item.end());
@@ -192,7 +198,7 @@ struct H5mdWriter::Impl {
     const Handle properties(check(H5Pcopy(dataset_properties.get()), what), H5Pclose);
     check_status(H5Pset_chunk(properties.get(), rank, chunk.data()), what);
     // Shuffling the bytes of the doubles first lets deflate find the repeated exponents.
-    if (deflate_available()) {
+    if (compress && deflate_available()) {
       check_status(H5Pset_shuffle(properties.get()), what);
       check_status(H5Pset_deflate(properties.get(), 4), what);
     }
@@ -272,11 +278,31 @@ H5mdWriter::H5mdWriter(const std::filesystem::path& path, const Scene& scene) : 
   }
   const Handle particles = w.group(root, "particles");
   const Handle all = w.group(particles.get(), "all");
+  w.box = !scene.space.box.empty();
+  w.sides = scene.space.genus > 0 ? 4 * scene.space.genus : 0;
   {
-    // H5MD requires a box; the embedding space has no boundary, so no edges either.
     const Handle box = w.group(all.get(), "box");
     w.attribute_ints(box.get(), "dimension", {static_cast<int>(w.ambient)}, true);
-    w.attribute_strings(box.get(), "boundary", std::vector<std::string>(w.ambient, "none"), false);
+    if (w.box) {
+      // An orthorhombic periodic box: its edges as a fixed [D] dataset (H5MD 1.1, "Simulation box").
+      w.attribute_strings(box.get(), "boundary", std::vector<std::string>(w.ambient, "periodic"), false);
+      const Handle space = w.vector_space(w.ambient);
+      const Handle edges(w.check(H5Dcreate2(box.get(), "edges", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT,
+                                            w.dataset_properties.get(), H5P_DEFAULT),
+                                 "creating dataset edges"),
+                         H5Dclose);
+      w.check_status(H5Dwrite(edges.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, scene.space.box.data()),
+                     "writing dataset edges");
+    } else {
+      // H5MD requires a box; the embedding space has no boundary, so no edges either. A compact
+      // hyperbolic surface is no box H5MD knows: its polygon is named by attributes of sesi's own.
+      w.attribute_strings(box.get(), "boundary", std::vector<std::string>(w.ambient, "none"), false);
+      if (w.sides > 0) {
+        w.attribute_strings(box.get(), "sesi_topology", {"hyperbolic-surface"}, true);
+        w.attribute_ints(box.get(), "genus", {scene.space.genus}, true);
+        w.attribute_double(box.get(), "radius", scene.space.radius);
+      }
+    }
   }
   {
     const Handle position = w.group(all.get(), "position");
@@ -288,9 +314,11 @@ H5mdWriter::H5mdWriter(const std::filesystem::path& path, const Scene& scene) : 
     w.position.name = "particles/all/position";
   }
   // The other elements are sampled with the positions: their step and time are hard links.
-  const auto element = [&](hid_t parent, const char* group, const char* full_name, std::vector<hsize_t> item) {
+  const auto element = [&](hid_t parent, const char* group, const char* full_name, std::vector<hsize_t> item,
+                           hid_t file_type = H5T_IEEE_F64LE, hid_t memory_type = H5T_NATIVE_DOUBLE,
+                           bool compress = true) {
     const Handle g = w.group(parent, group);
-    Series s = w.series(g.get(), "value", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, std::move(item));
+    Series s = w.series(g.get(), "value", file_type, memory_type, std::move(item), compress);
     s.name = full_name;
     w.link("/particles/all/position/step", (std::string("/") + full_name + "/step").c_str());
     w.link("/particles/all/position/time", (std::string("/") + full_name + "/time").c_str());
@@ -298,6 +326,16 @@ H5mdWriter::H5mdWriter(const std::filesystem::path& path, const Scene& scene) : 
   };
   w.chart_position = element(all.get(), "chart_position", "particles/all/chart_position", {w.bodies, w.dim});
   w.chart_momentum = element(all.get(), "chart_momentum", "particles/all/chart_momentum", {w.bodies, w.dim});
+  if (w.box) {
+    // H5MD's image element: the unwrapped position is position + edges * image.
+    w.image = element(all.get(), "image", "particles/all/image", {w.bodies, w.dim}, H5T_STD_I64LE, H5T_NATIVE_INT64);
+  } else if (w.sides > 0) {
+    w.unwrapped = element(all.get(), "unwrapped_position", "particles/all/unwrapped_position", {w.bodies, w.ambient});
+    // The words as the text of trajectory.csv's b<k>_word, variable-length strings.
+    w.word_type = Handle(w.check(H5Tcopy(H5T_C_S1), "creating a string type"), H5Tclose);
+    w.check_status(H5Tset_size(w.word_type.get(), H5T_VARIABLE), "creating a string type");
+    w.word = element(all.get(), "word", "particles/all/word", {w.bodies}, w.word_type.get(), w.word_type.get(), false);
+  }
   {
     std::vector<double> masses;
     for (const Body& b : scene.bodies) masses.push_back(b.mass);
@@ -336,6 +374,23 @@ void H5mdWriter::write(const Snapshot& s) {
   w.append(w.position, s.x.data());
   w.append(w.chart_position, s.q.data());
   w.append(w.chart_momentum, s.p.data());
+  if (w.box) {
+    if (!(static_cast<hsize_t>(s.image_counts.rows()) == w.dim && static_cast<hsize_t>(s.image_counts.cols()) == w.bodies)) {
+      throw std::logic_error("H5mdWriter::write: a snapshot without its image counts");
+    }
+    w.append(w.image, s.image_counts.data());
+  } else if (w.sides > 0) {
+    if (!fits(s.unwrapped, w.ambient, w.bodies) || s.words.size() != w.bodies) {
+      throw std::logic_error("H5mdWriter::write: a snapshot without its words");
+    }
+    w.append(w.unwrapped, s.unwrapped.data());
+    std::vector<std::string> texts;
+    std::vector<const char*> pointers;
+    texts.reserve(s.words.size());
+    for (const auto& word : s.words) texts.push_back(word_text(word));
+    for (const std::string& text : texts) pointers.push_back(text.c_str());
+    w.append(w.word, pointers.data());
+  }
   w.append(w.energy, &s.energy);
   if (!w.thermostat.empty()) {
     const std::array<double, 5> values = thermostat_values(s);
@@ -383,6 +438,31 @@ void H5mdWriter::replay(const std::filesystem::path& from, unsigned long long fr
   read("particles/all/chart_position/value", H5T_NATIVE_DOUBLE, w.bodies * w.dim, &q);
   read("particles/all/chart_momentum/value", H5T_NATIVE_DOUBLE, w.bodies * w.dim, &p);
   read("observables/energy/value", H5T_NATIVE_DOUBLE, 1, &energy);
+  std::vector<std::int64_t> image;
+  std::vector<double> unwrapped;
+  std::vector<std::vector<std::int16_t>> words;
+  if (w.box) read("particles/all/image/value", H5T_NATIVE_INT64, w.bodies * w.dim, &image);
+  if (w.sides > 0) {
+    read("particles/all/unwrapped_position/value", H5T_NATIVE_DOUBLE, w.bodies * w.ambient, &unwrapped);
+    std::vector<char*> texts;
+    // The strings HDF5 allocates in H5Dread, freed however the reading and the words turn out.
+    struct Reclaim {
+      std::vector<char*>& texts;
+      ~Reclaim() {
+        for (char*& text : texts) {
+          H5free_memory(text);
+          text = nullptr;
+        }
+      }
+    } reclaim{texts};
+    read("particles/all/word/value", w.word_type.get(), w.bodies, &texts);
+    words.reserve(texts.size());
+    for (const char* text : texts) {
+      auto word = parse_word_text(text ? std::string_view(text) : std::string_view(), w.sides);
+      if (!word) throw refuse("has a word that is not one in particles/all/word");
+      words.push_back(std::move(*word));
+    }
+  }
   std::vector<std::vector<double>> thermostat(w.thermostat.size());
   for (std::size_t k = 0; k < w.thermostat.size(); ++k) {
     read((std::string("observables/") + thermostat_names[k] + "/value").c_str(), H5T_NATIVE_DOUBLE, 1, &thermostat[k]);
@@ -396,6 +476,15 @@ void H5mdWriter::replay(const std::filesystem::path& from, unsigned long long fr
     s.q = Eigen::Map<const Eigen::MatrixXd>(&q[f * w.bodies * w.dim], static_cast<Eigen::Index>(w.dim), rows);
     s.p = Eigen::Map<const Eigen::MatrixXd>(&p[f * w.bodies * w.dim], static_cast<Eigen::Index>(w.dim), rows);
     s.energy = energy[f];
+    if (w.box) {
+      s.image_counts = Eigen::Map<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic>>(
+          &image[f * w.bodies * w.dim], static_cast<Eigen::Index>(w.dim), rows);
+    } else if (w.sides > 0) {
+      s.unwrapped =
+          Eigen::Map<const Eigen::MatrixXd>(&unwrapped[f * w.bodies * w.ambient], static_cast<Eigen::Index>(w.ambient), rows);
+      s.words.assign(words.begin() + static_cast<std::ptrdiff_t>(f * w.bodies),
+                     words.begin() + static_cast<std::ptrdiff_t>((f + 1) * w.bodies));
+    }
     if (!thermostat.empty()) {
       // The configurational temperature was written as the ratio of the sums: {T, 1}.
       s.thermostat = true;
@@ -414,9 +503,11 @@ void H5mdWriter::close() {
   if (w.file.get() < 0) return;
   bool ok = true;
   for (Series& s : w.thermostat) ok = s.dataset.close() && ok;
-  for (Series* s : {&w.energy, &w.chart_momentum, &w.chart_position, &w.position, &w.time, &w.step}) {
+  for (Series* s : {&w.energy, &w.word, &w.unwrapped, &w.image, &w.chart_momentum, &w.chart_position, &w.position,
+                    &w.time, &w.step}) {
     ok = s->dataset.close() && ok;
   }
+  ok = w.word_type.close() && ok;
   ok = w.dataset_properties.close() && ok;
   ok = w.group_properties.close() && ok;
   ok = ok && H5Fflush(w.file.get(), H5F_SCOPE_LOCAL) >= 0;

@@ -29,6 +29,13 @@ std::vector<std::string> trajectory_header(const Scene& scene) {
     for (int i = 1; i <= n; ++i) names.push_back(body + "q" + std::to_string(i));
     for (int i = 1; i <= n; ++i) names.push_back(body + "p" + std::to_string(i));
     for (int i = 1; i <= a; ++i) names.push_back(body + "x" + std::to_string(i));
+    // On a topology: the image counts (E^n box), or the unwrapped point and the word (H^2 surface).
+    if (!scene.space.box.empty()) {
+      for (int i = 1; i <= n; ++i) names.push_back(body + "n" + std::to_string(i));
+    } else if (scene.space.genus > 0) {
+      for (int i = 1; i <= a; ++i) names.push_back(body + "u" + std::to_string(i));
+      names.push_back(body + "word");
+    }
   }
   return names;
 }
@@ -197,7 +204,7 @@ void Recorder::write_row(const Snapshot& s) {
       stats_.max_distance = std::max(stats_.max_distance, far);
     }
   }
-  if (trajectory_csv_) {
+  if (trajectory_csv_ && !scene_.space.has_topology()) {
     row_.assign(1, s.t);
     for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
       row_.insert(row_.end(), s.q.col(b).data(), s.q.col(b).data() + s.q.rows());
@@ -205,6 +212,26 @@ void Recorder::write_row(const Snapshot& s) {
       row_.insert(row_.end(), s.x.col(b).data(), s.x.col(b).data() + s.x.rows());
     }
     trajectory_csv_->row(row_);
+  } else if (trajectory_csv_) {
+    check_topology(s);
+    CsvWriter& csv = *trajectory_csv_;
+    csv.begin_row();
+    csv.number(s.t);
+    const auto numbers = [&](const auto& column) {
+      for (Eigen::Index i = 0; i < column.size(); ++i) csv.number(column(i));
+    };
+    for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
+      numbers(s.q.col(b));
+      numbers(s.p.col(b));
+      numbers(s.x.col(b));
+      if (!scene_.space.box.empty()) {
+        for (Eigen::Index i = 0; i < s.image_counts.rows(); ++i) csv.integer(s.image_counts(i, b));
+      } else {
+        numbers(s.unwrapped.col(b));
+        csv.text(word_text(s.words[static_cast<std::size_t>(b)]));
+      }
+    }
+    csv.end_row();
   }
 #ifdef SESI_HAVE_HDF5
   if (trajectory_h5md_) trajectory_h5md_->write(s);
@@ -226,6 +253,16 @@ void Recorder::write_row(const Snapshot& s) {
   diagnostics_.row(row_);
   if (exact_) exact_->row(s);
   ++frames_;
+}
+
+void Recorder::check_topology(const Snapshot& s) const {
+  // The run loop fills them in on a topology (run_loop.cpp, observe_topology).
+  const auto bodies = static_cast<Eigen::Index>(scene_.body_count());
+  const bool fits = !scene_.space.box.empty()
+                        ? s.image_counts.rows() == scene_.dim() && s.image_counts.cols() == bodies
+                        : static_cast<Eigen::Index>(s.words.size()) == bodies && s.unwrapped.cols() == bodies &&
+                              s.unwrapped.rows() == s.x.rows();
+  if (!fits) throw std::logic_error("Recorder::write_row: a snapshot without its topology's images");
 }
 
 void Recorder::set_final(Snapshot last) { final_ = std::move(last); }

@@ -1,7 +1,9 @@
 #pragma once
 /// @file recorder.hpp
 /// The outputs of a run, written into the (staging) output directory:
-///   trajectory.csv  t, then per body b: chart q, momenta p, embedding x (trajectory_format csv)
+///   trajectory.csv  t, then per body b: chart q, momenta p, embedding x (trajectory_format csv);
+///                   on an E^n box then the image counts n, on an H^2 surface the unwrapped point
+///                   u and the word (Snapshot::image_counts, words, unwrapped)
 ///   trajectory.h5   the same numbers as H5MD 1.1 (trajectory_format h5md; h5md_writer.hpp)
 ///   diagnostics.csv t, energy, energy error, momentum-map components; with a thermostat also
 ///                   temperature (the target), kinetic_temperature, configurational_temperature,
@@ -66,6 +68,8 @@ class Recorder final : public RunSink {
   std::vector<double> max_exact_error() const;
 
  private:
+  /// Throws std::logic_error unless s holds the images of the scene's topology.
+  void check_topology(const Snapshot& s) const;
   const Scene& scene_;
   std::filesystem::path dir_;
   std::optional<CsvWriter> trajectory_csv_;  ///< trajectory_format csv

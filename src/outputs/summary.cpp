@@ -20,6 +20,12 @@ void write_space(JsonWriter& json, const Scene& scene) {
   json.string("kind", space_name(scene.space.kind));
   json.integer("dim", scene.space.dim);
   if (scene.space.kind != SpaceKind::euclidean) json.number("radius", scene.space.radius);
+  // A topology: the box's edges or the surface's genus, and the largest pair cutoff it allows
+  // (the space's own max_cutoff(): half the shortest edge; on a surface, include/sesi/topologies/
+  // hyperbolic_surface.hpp).
+  if (!scene.space.box.empty()) json.numbers("box", scene.space.box);
+  if (scene.space.genus > 0) json.integer("genus", scene.space.genus);
+  if (scene.space.has_topology()) json.number("max_cutoff", max_cutoff(scene.space));
   json.end_object();
 }
 
@@ -34,6 +40,10 @@ void write_final_state(JsonWriter& json, const Snapshot& s) {
     json.numbers("p", Eigen::VectorXd(s.p.col(b)));
     json.numbers("x", Eigen::VectorXd(s.x.col(b)));
     json.numbers("v", Eigen::VectorXd(s.v.col(b)));
+    // On a topology: the image counts (E^n box), or the unwrapped point and the word (H^2 surface).
+    if (s.image_counts.cols() > b) json.numbers("n", Eigen::VectorXd(s.image_counts.col(b).cast<double>()));
+    if (s.unwrapped.cols() > b) json.numbers("u", Eigen::VectorXd(s.unwrapped.col(b)));
+    if (static_cast<Eigen::Index>(s.words.size()) > b) json.string("word", word_text(s.words[static_cast<std::size_t>(b)]));
     json.end_object();
   }
   json.end_array();

@@ -193,6 +193,9 @@ void resolve_auto(Scene& scene) {
   for (std::string_view name : thermostat ? std::span<const std::string_view>(thermostat_candidates)
                                           : std::span<const std::string_view>(candidate_names)) {
     if (is_embedded_method(name) && !geodesic_ok) continue;
+    // A topology: the plain compositions only (check_topology_method; the bodies are reduced into
+    // the domain between steps, which a processed kernel or an embedding state does not allow).
+    if (scene.space.has_topology() && !is_composition_method(name)) continue;
     const MethodInfo& info = *find_method_info(name);
     AutoCandidate c;
     c.method = std::string(name);

@@ -245,6 +245,8 @@ std::string body_text(const Checkpoint& c) {
   out.key("name").str(scene.name);
   out.key("source").str(scene.source);
   out.key("space").str(space_names[static_cast<int>(scene.space.kind)]).integer(scene.space.dim).num(scene.space.radius);
+  const bool topology = c.file_version() == Checkpoint::topology_version;
+  if (topology) out.key("topology").vector(scene.space.box).integer(scene.space.genus);  // version 4
   out.key("exact").integer(scene.exact == ExactSolution::paper ? 1 : 0);
   out.key("masses").integer(scene.body_count());
   for (const Body& b : scene.bodies) out.num(b.mass);
@@ -288,7 +290,19 @@ std::string body_text(const Checkpoint& c) {
     for (const Eigen::MatrixXd& f : c.state.frames) out.matrix(f);
     out.key("cluster").integer(c.state.clustered ? 1 : 0);
     if (c.state.clustered) out.matrix(c.state.cluster);
-    if (scene.thermostat) out.key("thermostat_state").vector(c.state.thermostat);  // version 3
+    if (scene.thermostat) out.key("thermostat_state").vector(c.state.thermostat);  // version 3 (or 4)
+    if (topology) {  // version 4: the image record, exact integers
+      const auto& n = c.state.image_counts;
+      out.key("image_counts").integer(n.rows()).integer(n.cols());
+      for (Eigen::Index j = 0; j < n.cols(); ++j) {
+        for (Eigen::Index i = 0; i < n.rows(); ++i) out.integer(n(i, j));
+      }
+      out.key("words").integer(static_cast<long long>(c.state.words.size()));
+      for (const std::vector<std::int16_t>& word : c.state.words) {
+        out.integer(static_cast<long long>(word.size()));
+        for (const std::int16_t letter : word) out.integer(letter);
+      }
+    }
   }
   out.key("outputs")
       .integer(static_cast<long long>(c.outputs.trajectory_bytes))
@@ -335,6 +349,13 @@ Checkpoint parse_body(std::string_view text, int version) {
   if (!known) throw Corrupt{"unknown space kind '" + kind + "'"};
   scene.space.dim = static_cast<int>(in.integer(1, 1 << 20));
   scene.space.radius = in.num();
+  const bool topology = version == Checkpoint::topology_version;
+  if (topology) {  // version 4: a box or a genus (check_scene_model judges them as a scene's)
+    in.key("topology");
+    scene.space.box = in.vector(1 << 20);
+    scene.space.genus = static_cast<int>(in.integer(0, 1 << 20));
+    if (scene.space.box.empty() == (scene.space.genus == 0)) throw Corrupt{"it has no topology, or two"};
+  }
   in.key("exact");
   scene.exact = in.integer(0, 1) == 1 ? ExactSolution::paper : ExactSolution::none;
   const int dim = scene.space.dim;
@@ -402,9 +423,11 @@ Checkpoint parse_body(std::string_view text, int version) {
     spec.tolerance = a.tolerance;
     spec.auto_choice = std::move(a);
   }
-  // A thermostatted run's scene (version 3 only).
+  // A thermostatted run's scene (version 3, or 4 on a topology).
   if (in.optional_key("thermostat")) {
-    if (version != Checkpoint::thermostat_version) throw Corrupt{"it has a thermostat, which version 3 holds"};
+    if (version != Checkpoint::thermostat_version && !topology) {
+      throw Corrupt{"it has a thermostat, which version 3 (or 4) holds"};
+    }
     ThermostatSpec t;
     t.kind = in.str();
     const long long knots = in.integer(1, 1 << 20);
@@ -430,8 +453,9 @@ Checkpoint parse_body(std::string_view text, int version) {
                       : in.optional_key("x") ? Checkpoint::version
                                              : 0;
   if (written == 0) throw Corrupt{"expected its state ('q' or 'x')"};
-  // (Version 3's state is version 1's with the thermostat's after it.)
-  const bool chart = version == Checkpoint::chart_version || version == Checkpoint::thermostat_version;
+  // (Version 3's state is version 1's with the thermostat's after it; version 4's, version 1's or
+  // 3's with the image record after it.)
+  const bool chart = version != Checkpoint::version;
   if (written != (chart ? Checkpoint::chart_version : version)) throw OtherVersion{written};
   if (chart) {
     c.state.q = in.matrix(dim, bodies);
@@ -444,9 +468,30 @@ Checkpoint parse_body(std::string_view text, int version) {
     in.key("cluster");
     c.state.clustered = in.integer(0, 1) == 1;
     if (c.state.clustered) c.state.cluster = in.matrix(ambient, ambient);
-    if (version == Checkpoint::thermostat_version) {
+    if (scene.thermostat) {
       in.key("thermostat_state");
       c.state.thermostat = in.vector(1 << 20);
+    }
+    if (topology) {
+      in.key("image_counts");
+      const bool box = !scene.space.box.empty();
+      const long long rows = in.integer(0, dim), cols = in.integer(0, bodies);
+      if (rows != (box ? dim : 0) || cols != (box ? bodies : 0)) throw Corrupt{"the image counts have the wrong size"};
+      c.state.image_counts.resize(rows, cols);
+      for (long long j = 0; j < cols; ++j) {
+        for (long long i = 0; i < rows; ++i) {
+          c.state.image_counts(i, j) = in.integer(std::numeric_limits<long long>::min(), std::numeric_limits<long long>::max());
+        }
+      }
+      in.key("words");
+      const long long words = in.integer(0, bodies);
+      if (words != (box ? 0 : bodies)) throw Corrupt{"the words do not match the bodies"};
+      // Letters are the polygon's sides 0 .. 4g - 1.
+      const long long sides = 4LL * scene.space.genus;
+      for (long long b = 0; b < words; ++b) {
+        std::vector<std::int16_t>& word = c.state.words.emplace_back(static_cast<std::size_t>(in.integer(0, 1 << 24)));
+        for (std::int16_t& letter : word) letter = static_cast<std::int16_t>(in.integer(0, sides - 1));
+      }
     }
   } else {
     c.state.embedded = true;
@@ -483,7 +528,7 @@ Checkpoint parse_body(std::string_view text, int version) {
   c.recorder.exact_max_error = in.vector(bodies);
   in.key("exact_last");
   c.recorder.exact_last_error = in.vector(bodies);
-  if (version == Checkpoint::thermostat_version) {
+  if (scene.thermostat) {
     in.key("thermostat_stats");
     s.conserved_tracking = in.integer(0, 1) == 1;
     s.conserved_initial = in.num();
@@ -571,10 +616,11 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
     throw refuse("the checkpoint's first line is malformed");
   }
   if (version != Checkpoint::chart_version && version != Checkpoint::version &&
-      version != Checkpoint::thermostat_version) {
+      version != Checkpoint::thermostat_version && version != Checkpoint::topology_version) {
     throw refuse("checkpoint format version " + std::to_string(version) + "; this sesi reads versions " +
-                 std::to_string(Checkpoint::chart_version) + ", " + std::to_string(Checkpoint::version) + " and " +
-                 std::to_string(Checkpoint::thermostat_version));
+                 std::to_string(Checkpoint::chart_version) + ", " + std::to_string(Checkpoint::version) + ", " +
+                 std::to_string(Checkpoint::thermostat_version) + " and " +
+                 std::to_string(Checkpoint::topology_version));
   }
   const std::string_view body = std::string_view(text).substr(eol + 1);
   if (body.size() != length) {
@@ -584,8 +630,9 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   if (fnv1a(body) != sum) throw refuse("the checkpoint is corrupted (checksum mismatch)");
   const std::string reads = "; this sesi reads format version " + std::to_string(Checkpoint::chart_version) +
                             " (a chart method's q and p) and " + std::to_string(Checkpoint::version) +
-                            " (a geodesic method's x and v), and version " +
-                            std::to_string(Checkpoint::thermostat_version) + " for a thermostatted run";
+                            " (a geodesic method's x and v), version " +
+                            std::to_string(Checkpoint::thermostat_version) + " for a thermostatted run and " +
+                            std::to_string(Checkpoint::topology_version) + " for a run on a box or surface";
   Checkpoint c;
   try {
     c = parse_body(body, version);

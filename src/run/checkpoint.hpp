@@ -48,14 +48,19 @@ struct Checkpoint {
   /// but for a geodesic method's embedded state (x, v) in their place, 3 a thermostatted run's:
   /// version 1's with the scene's [thermostat], the thermostat's saved state (its step counter,
   /// heat and chain variables: nothing random but the seed and the step) and the summary's
-  /// thermostat statistics. A chart method's NVE checkpoint is still written as version 1 (what
-  /// an older sesi reads), a geodesic method's as version 2, a thermostatted one as version 3
-  /// (which an older sesi refuses as a version it does not read).
+  /// thermostat statistics. 4 a run on a topology (an E^n box or an H^2 surface; chart methods
+  /// only): version 1's, or 3's with a thermostat, with the space's box or genus and the bodies'
+  /// image record (FramedState::image_counts, words) after the state. A chart method's NVE
+  /// checkpoint is still written as version 1 (what an older sesi reads), a geodesic method's as
+  /// version 2, a thermostatted one as version 3 and one on a topology as version 4 (which an
+  /// older sesi refuses as a version it does not read).
   static constexpr int version = 2;
   static constexpr int chart_version = 1;
   static constexpr int thermostat_version = 3;
+  static constexpr int topology_version = 4;
   /// The version that holds this checkpoint's state.
   int file_version() const {
+    if (scene.space.has_topology()) return topology_version;
     return state.embedded ? version : scene.thermostat ? thermostat_version : chart_version;
   }
   Scene scene;  ///< the scene model with the settings in force; bodies' q, p unused (see state)

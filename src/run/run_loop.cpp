@@ -126,6 +126,17 @@ void observe_thermostat(const Scene& scene, Integrator& integrator, double t, Sn
   s.conserved = s.energy + integrator.conserved_offset();
 }
 
+/// A run on a topology: the image record of the integrator's state into s, beside its wrapped
+/// points (Snapshot::image_counts on an E^n box; words and unwrapped points on an H^2 surface).
+void observe_topology(const Scene& scene, Integrator& integrator, Snapshot& s) {
+  if (!scene.space.box.empty()) {
+    s.image_counts = integrator.image_counts();
+  } else if (scene.space.genus > 0) {
+    s.words = integrator.words();
+    s.unwrapped = integrator.unwrapped_points();
+  }
+}
+
 /// The step sizes: |dt| everywhere but the last step, which ends exactly at t_end. Times are
 /// k dt, or t0 + (k - k0) dt for a run that goes on from a time t0 off that grid (RunStart).
 struct Schedule {
@@ -265,6 +276,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   observe_thermostat(scene, integrator, s.t, s, true);
   s.momentum = integrator.momentum_map();
   s.x = integrator.points();
+  observe_topology(scene, integrator, s);
   s.v = integrator.velocities();
   if (fresh) {
     recorder.track(s.energy, s.momentum);
@@ -331,6 +343,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
       return false;
     }
     s.x = integrator.points();
+    observe_topology(scene, integrator, s);
     if (encounters.active()) {
       const std::string detail =
           integrator.clustered() ? encounters.check(integrator.local_points(), integrator) : encounters.check(s.x, integrator);

@@ -1,5 +1,6 @@
 #include "run_types.hpp"
 
+#include <charconv>
 #include <cmath>
 
 namespace sesi::program {
@@ -30,6 +31,32 @@ std::string non_finite_detail(const Eigen::MatrixXd& q, const Eigen::MatrixXd& p
   if (std::isinf(energy)) return detail + ": the energy" + overflow + at;
   if (std::isnan(energy)) return detail + ": the energy" + nan + at;
   return detail;
+}
+
+std::string word_text(const std::vector<std::int16_t>& word) {
+  if (word.empty()) return "e";
+  std::string text;
+  for (const std::int16_t letter : word) {
+    if (!text.empty()) text += '.';
+    text += std::to_string(letter + 1);
+  }
+  return text;
+}
+
+std::optional<std::vector<std::int16_t>> parse_word_text(std::string_view text, int sides) {
+  if (text == "e") return std::vector<std::int16_t>{};
+  std::vector<std::int16_t> word;
+  const char* at = text.data();
+  const char* const end = text.data() + text.size();
+  while (true) {
+    int side = 0;
+    const auto [next, ec] = std::from_chars(at, end, side);
+    if (ec != std::errc() || side < 1 || side > sides) return std::nullopt;
+    word.push_back(static_cast<std::int16_t>(side - 1));
+    if (next == end) return word;
+    if (*next != '.') return std::nullopt;
+    at = next + 1;
+  }
 }
 
 const char* stop_reason_name(StopReason reason) {

@@ -5,8 +5,12 @@
 
 #include <array>
 #include <atomic>
+#include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -31,7 +35,23 @@ struct Snapshot {
   double temperature = 0.0, kinetic_temperature = 0.0, heat = 0.0, conserved = 0.0;
   std::array<double, 2> configurational{};
   double configurational_temperature() const { return configurational[0] / configurational[1]; }
+  /// A run on a topology (SpaceSpec::box or genus; x is then the wrapped, in-domain point), else
+  /// empty: on an E^n box the image counts n (dim x bodies; the unwrapped point is x + L .* n,
+  /// exact in the counts); on an H^2 surface each body's word W_b (letters 0..4g-1, sides of the
+  /// polygon; the product of their generators left to right) and the unwrapped point u_b = W_b x_b
+  /// in the universal cover (ambient x bodies; Integrator::image_counts, words, unwrapped_points).
+  Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic> image_counts;
+  std::vector<std::vector<std::int16_t>> words;
+  Eigen::MatrixXd unwrapped;
 };
+
+/// A surface word as the outputs write it (trajectory.csv's b<k>_word, trajectory.h5's
+/// particles/all/word): "e" for the identity, else the 1-based side numbers joined by '.'
+/// ("3.7.2" is g_2 g_6 g_1 in 0-based letters).
+std::string word_text(const std::vector<std::int16_t>& word);
+/// The word of such a text (letters 0-based), or none when it is not one (an empty text, a
+/// letter that is not a number from 1 to `sides`).
+std::optional<std::vector<std::int16_t>> parse_word_text(std::string_view text, int sides);
 
 enum class StopReason { completed, non_finite, invariant_failed, interrupted, energy_guard, close_encounter };
 

@@ -4,7 +4,9 @@
 
 #include <sesi/neighbours.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <sesi/chart.hpp>
@@ -23,7 +25,31 @@ Geometry::Geometry(const SpaceSpec& space)
             break;
         }
         return sesi::Euclidean<Eigen::Dynamic>(space.dim);
-      }()) {}
+      }()) {
+  if (!space.box.empty()) {
+    box_.emplace(Eigen::Map<const Eigen::VectorXd>(space.box.data(), static_cast<Eigen::Index>(space.box.size())));
+  }
+  if (space.genus != 0) surface_.emplace(space.genus, space.radius);
+}
+
+void Geometry::reduce(Vector& x) const {
+  if (box_) {
+    // x - L floor(x / L) per axis, into [0, L) (the box's own reduction, as the run's wrap).
+    Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1> counts = Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1>::Zero(x.size());
+    box_->reduce(x, counts);
+  } else if (surface_) {
+    typename sesi::HyperbolicSurface<double>::Vector y = x;
+    typename sesi::HyperbolicSurface<double>::Word applied;
+    surface_->reduce(y, applied);
+    x = y;
+  }
+}
+
+double Geometry::max_cutoff() const {
+  if (box_) return box_->max_cutoff();
+  if (surface_) return surface_->max_cutoff();
+  return std::numeric_limits<double>::infinity();
+}
 
 int Geometry::ambient_dim() const {
   return std::visit([](const auto& c) { return c.ambient_dim(); }, chart_);
@@ -82,7 +108,23 @@ double Geometry::kinetic_energy(const Vector& q, const Vector& p, double m) cons
   return std::visit([&](const auto& chart) { return sesi::kinetic_energy(chart, q, p, m); }, chart_);
 }
 
-double Geometry::distance(const Vector& x, const Vector& y) const {
+double Geometry::distance(const Vector& x0, const Vector& y0) const {
+  // The minimum image (Allen & Tildesley 1.5.2; Sausset & Tarjus 2007 on the surfaces): both
+  // reduced into the domain, y moved to its image nearest to x.
+  Vector x = x0, y = y0;
+  if (box_) {
+    reduce(x);
+    reduce(y);
+    Vector image = y;
+    box_->nearest_image(x, image);
+    y = image;
+  } else if (surface_) {
+    reduce(x);
+    reduce(y);
+    typename sesi::HyperbolicSurface<double>::Vector a = x, b = y;
+    surface_->nearest_image(a, b);
+    y = b;
+  }
   return std::visit(
       [&](const auto& chart) {
         // H^n: by radii and directions, so a scene's bodies far out are not measured with the
@@ -101,7 +143,99 @@ double Geometry::radii_from_origin(const Vector& x) const {
   return std::asinh(x.head(space_.dim).norm() / space_.radius);
 }
 
+std::vector<std::pair<int, int>> Geometry::topology_close_pairs(const Eigen::MatrixXd& X, double reach) const {
+  std::vector<std::pair<int, int>> out;
+  const int n = static_cast<int>(X.cols());
+  if (n < 2) return out;
+  // The points reduced into the domain, then the images of each within reach of the domain
+  // (ghosts): a pair within reach on the minimum image is then a pair of the index of those
+  // points (Allen & Tildesley 5.3.2 for the box's cells; images_near on the surface's polygon).
+  std::vector<Vector> points;
+  std::vector<int> owner;
+  points.reserve(static_cast<std::size_t>(n));
+  for (int b = 0; b < n; ++b) {
+    Vector x = X.col(b);
+    reduce(x);
+    points.push_back(x);
+    owner.push_back(b);
+  }
+  const bool all_pairs = !(reach < max_cutoff());  // (a reach past the largest cutoff: every pair, exactly)
+  if (all_pairs) {
+    for (int j = 1; j < n; ++j) {
+      for (int i = 0; i < j; ++i) {
+        if (distance(points[static_cast<std::size_t>(i)], points[static_cast<std::size_t>(j)]) < reach) out.emplace_back(i, j);
+      }
+    }
+    return out;
+  }
+  if (box_) {
+    const Vector& L = box_->edges();
+    const int dim = static_cast<int>(L.size());
+    std::vector<double> shifts;
+    for (int b = 0; b < n; ++b) {
+      const Vector x = points[static_cast<std::size_t>(b)];
+      // Every combination of a shift per axis: 0, and +L or -L where x is within reach of a face.
+      std::vector<Vector> images{x};
+      for (int k = 0; k < dim; ++k) {
+        shifts.assign(1, 0.0);
+        if (x[k] < reach) shifts.push_back(L[k]);
+        if (x[k] > L[k] - reach) shifts.push_back(-L[k]);
+        const std::size_t before = images.size();
+        for (std::size_t s = 1; s < shifts.size(); ++s) {
+          for (std::size_t m = 0; m < before; ++m) {
+            Vector y = images[m];
+            y[k] += shifts[s];
+            images.push_back(y);
+          }
+        }
+      }
+      for (std::size_t m = 1; m < images.size(); ++m) {
+        points.push_back(images[m]);
+        owner.push_back(b);
+      }
+    }
+  } else {
+    std::vector<int> near;
+    for (int b = 0; b < n; ++b) {
+      const typename sesi::HyperbolicSurface<double>::Vector x = points[static_cast<std::size_t>(b)];
+      near.clear();
+      surface_->images_near(x, reach, near);
+      for (const int k : near) {
+        if (k == 0) continue;  // the identity: the point itself
+        typename sesi::HyperbolicSurface<double>::Vector y = x;
+        surface_->apply(k, y);
+        points.push_back(y);
+        owner.push_back(b);
+      }
+    }
+  }
+  Eigen::MatrixXd all(ambient_dim(), static_cast<Eigen::Index>(points.size()));
+  for (std::size_t m = 0; m < points.size(); ++m) all.col(static_cast<Eigen::Index>(m)) = points[m];
+  std::visit(
+      [&](const auto& chart) {
+        using Chart = std::remove_cvref_t<decltype(chart)>;
+        sesi::NeighbourIndex<Chart> index;
+        sesi::NeighbourLists lists;
+        index.build(chart, all, reach, lists);
+        for (int i = 0; i < n; ++i) {
+          for (int k = lists.begin(i); k < lists.end(i); ++k) {
+            const int j = owner[static_cast<std::size_t>(lists.index[static_cast<std::size_t>(k)])];
+            if (j != i) out.emplace_back(std::min(i, j), std::max(i, j));
+          }
+        }
+      },
+      chart_);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  // The index's test is on the chord to a ghost; keep the pairs within reach on the minimum image.
+  std::erase_if(out, [&](const std::pair<int, int>& pair) {
+    return !(distance(points[static_cast<std::size_t>(pair.first)], points[static_cast<std::size_t>(pair.second)]) < reach);
+  });
+  return out;
+}
+
 std::vector<std::pair<int, int>> Geometry::close_pairs(const Eigen::MatrixXd& X, double reach, bool antipodal) const {
+  if (has_topology() && !antipodal) return topology_close_pairs(X, reach);
   std::vector<std::pair<int, int>> out;
   const int n = static_cast<int>(X.cols());
   if (n < 2 && !antipodal) return out;

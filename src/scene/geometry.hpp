@@ -16,6 +16,8 @@
 #include <sesi/spaces/euclidean.hpp>
 #include <sesi/spaces/hyperbolic.hpp>
 #include <sesi/spaces/sphere.hpp>
+#include <sesi/topologies/hyperbolic_surface.hpp>
+#include <sesi/topologies/periodic_box.hpp>
 
 #include "scene.hpp"
 
@@ -56,7 +58,18 @@ class Geometry {
   /// The pairs (i, j), i < j, of columns of X (embedding points) at distance < reach, in
   /// O(N log N) through the library's neighbour index; with antipodal (S^n only), the pairs
   /// whose distance is > pi R - reach instead (within reach of each other's antipode).
+  /// With a topology, distances on the minimum image (distance below), found among the points
+  /// reduced into the domain and their images within reach of it (ghosts).
   std::vector<std::pair<int, int>> close_pairs(const Eigen::MatrixXd& X, double reach, bool antipodal = false) const;
+
+  // A topology (SpaceSpec::box or genus; docs/topology.md). distance() is then the distance of
+  // the minimum image: of x and the image of y nearest to it, both reduced into the domain first.
+
+  bool has_topology() const { return box_.has_value() || surface_.has_value(); }
+  /// x <- its image in the domain (an isometry: a point of the same body); nothing without a topology.
+  void reduce(Vector& x) const;
+  /// The topology's largest allowed pair cutoff (+inf without one; max_cutoff, validate.hpp).
+  double max_cutoff() const;
 
   /// The first chart coordinate of q outside the chart's domain (0-based), with the domain
   /// ("[0, pi]", ">= 0"), or nothing. S^n: q_1..q_{n-1} in [0, pi]; H^n, n >= 2: q_1 >= 0,
@@ -66,8 +79,13 @@ class Geometry {
  private:
   using Charts = std::variant<sesi::Sphere<Eigen::Dynamic>, sesi::Hyperbolic<Eigen::Dynamic>,
                               sesi::Euclidean<Eigen::Dynamic>>;
+  /// close_pairs on a topology: ghosts of the reduced points, pairs of the real bodies.
+  std::vector<std::pair<int, int>> topology_close_pairs(const Eigen::MatrixXd& X, double reach) const;
+
   SpaceSpec space_;
   Charts chart_;
+  std::optional<sesi::PeriodicBox<double, Eigen::Dynamic>> box_;
+  std::optional<sesi::HyperbolicSurface<double>> surface_;
 };
 
 }  // namespace sesi::program

@@ -115,6 +115,21 @@ bool is_method(std::string_view name) {
 bool is_embedded_method(std::string_view name) {
   return std::find(embedded_names.begin(), embedded_names.end(), name) != embedded_names.end();
 }
+namespace {
+template <class... Method>
+constexpr auto composition_names_of(MethodList<Method...>) {
+  constexpr std::size_t count = ((family_of<Method> == "chart" ? 1 : 0) + ... + 0);
+  std::array<std::string_view, count> out{};
+  std::size_t k = 0;
+  ((family_of<Method> == "chart" ? static_cast<void>(out[k++] = Method::name) : static_cast<void>(0)), ...);
+  return out;
+}
+constexpr auto composition_names = composition_names_of(Methods{});
+}  // namespace
+std::span<const std::string_view> composition_method_names() { return composition_names; }
+bool is_composition_method(std::string_view name) {
+  return std::find(composition_names.begin(), composition_names.end(), name) != composition_names.end();
+}
 const MethodInfo* find_method_info(std::string_view name) {
   for (const MethodInfo& m : catalogue) {
     if (m.name == name) return &m;

@@ -272,6 +272,11 @@ using EmbeddedMethods = MethodList<
 /// Is name a geodesic method (EmbeddedMethods)?
 bool is_embedded_method(std::string_view name);
 
+/// The chart compositions that are not processed (sesi2 .. sesi8-kahan-li), in registration order:
+/// the methods that run on a space with a topology (check_topology_method, validate.hpp).
+std::span<const std::string_view> composition_method_names();
+bool is_composition_method(std::string_view name);
+
 /// What --help and the scene checks need to know of a method.
 struct MethodInfo {
   std::string_view name;

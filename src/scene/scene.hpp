@@ -23,10 +23,21 @@ enum class SpaceKind { sphere, hyperbolic, euclidean };
 /// "sphere", "hyperbolic", "euclidean".
 std::string_view space_name(SpaceKind kind);
 
+/// The space of a scene, with its topology (docs/scene-format.md, [space]; docs/topology.md): the
+/// whole S^n, H^n or E^n, or E^n with a periodic box (`box`), or a compact surface H^2/Gamma of
+/// genus g (`genus`). Bodies of a topology are kept in its domain (sesi::wrap).
 struct SpaceSpec {
   SpaceKind kind = SpaceKind::sphere;
   int dim = 2;
   double radius = 1.0;  ///< 1 (unused) on euclidean
+  /// E^n only: the edges L_1..L_n of an orthorhombic periodic box, domain [0, L_k) per axis
+  /// (sesi::PeriodicBox); empty: no box.
+  std::vector<double> box{};  // ({}: scenes built as {kind, dim, radius} stay warning-free)
+  /// H^2 only: the genus g >= 2 of the compact surface (sesi::HyperbolicSurface); 0: the whole H^n.
+  int genus = 0;
+
+  /// Whether the space has a topology (a box or a genus).
+  bool has_topology() const { return !box.empty() || genus != 0; }
 };
 
 struct Body {

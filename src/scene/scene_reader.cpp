@@ -448,9 +448,11 @@ class SceneReader {
     if (!table) root_.missing("space", "a table [space] with kind and dim");
     const TableReader space(*table, "space", file_);
     static constexpr std::array curved_keys = {"kind"sv, "dim"sv, "radius"sv};
-    static constexpr std::array flat_keys = {"kind"sv, "dim"sv};
+    static constexpr std::array hyperbolic_keys = {"kind"sv, "dim"sv, "radius"sv, "genus"sv};
+    static constexpr std::array flat_keys = {"kind"sv, "dim"sv, "box"sv};
+    static constexpr std::array any_keys = {"kind"sv, "dim"sv, "radius"sv, "box"sv, "genus"sv};
     if (!space.has("kind")) {
-      space.allow_only(curved_keys, "[space]");
+      space.allow_only(any_keys, "[space]");
       space.missing("kind", one_of(space_kinds));
     }
     const std::string kind = space.string("kind", "a string");
@@ -465,8 +467,18 @@ class SceneReader {
                              " (expected " + one_of(space_kinds) + ")");
     }
     const bool euclidean = scene_.space.kind == SpaceKind::euclidean;
+    const bool hyperbolic = scene_.space.kind == SpaceKind::hyperbolic;
+    // A topology key of another space: say which space takes it (check_box, check_genus).
+    if (!euclidean && space.has("box")) {
+      check_box({}, scene_.space.kind, 0, space.origin_of("box"), space.key_path("box"));
+    }
+    if (!hyperbolic && space.has("genus")) {
+      check_genus(0, scene_.space.kind, 0, space.origin_of("genus"), space.key_path("genus"));
+    }
     if (euclidean) {
       space.allow_only(flat_keys, "[space] of kind euclidean");
+    } else if (hyperbolic) {
+      space.allow_only(hyperbolic_keys, "[space]");
     } else {
       space.allow_only(curved_keys, "[space]");
     }
@@ -479,6 +491,19 @@ class SceneReader {
     if (!euclidean) {
       scene_.space.radius = space.number_or("radius", 1.0, "a finite number > 0");
       check_radius(scene_.space.radius, space.origin_of("radius"), space.key_path("radius"));
+    }
+    if (euclidean && space.has("box")) {
+      // (Sized by the reader first, so that a wrong length names the array and each bad edge its place.)
+      const Eigen::VectorXd box = space.vector("box", scene_.space.dim, "the box's edges L_1..L_n, one per axis");
+      scene_.space.box.assign(box.data(), box.data() + box.size());
+      check_box(scene_.space.box, scene_.space.kind, scene_.space.dim, space.origin_of("box"), space.key_path("box"));
+    }
+    if (hyperbolic && space.has("genus")) {
+      const long genus = space.integer("genus", "an integer from 2 to " +
+                                                    std::to_string(sesi::HyperbolicSurface<double>::max_genus) +
+                                                    " (a compact surface's genus)");
+      check_genus(genus, scene_.space.kind, scene_.space.dim, space.origin_of("genus"), space.key_path("genus"));
+      scene_.space.genus = static_cast<int>(genus);
     }
     geometry_.emplace(scene_.space);
   }
@@ -588,6 +613,7 @@ class SceneReader {
       const TableReader term(*tables[k], "potential[" + std::to_string(k + 1) + "]", file_);
       scene_.potentials.push_back(read_potential(term));
       provenance_.potentials.push_back(term.origin());
+      check_topology_potential(scene_.potentials.back(), scene_.space, place(term));
     }
   }
 
@@ -669,6 +695,7 @@ class SceneReader {
     if (in.has("method")) {
       spec.method = in.string("method", "a method name or \"auto\"");
       check_method_or_auto(spec.method, in.origin_of("method"), in.key_path("method"));
+      check_topology_method(scene_, in.origin_of("method"), in.key_path("method"));
       method_origin_ = in.origin_of("method");
     }
     if (in.has("tolerance")) {

@@ -9,6 +9,8 @@
 #include <vector>
 
 #include <sesi/potentials.hpp>
+#include <sesi/topologies/hyperbolic_surface.hpp>
+#include <sesi/topologies/periodic_box.hpp>
 
 #include "methods.hpp"
 #include "suggest.hpp"
@@ -338,19 +340,115 @@ void check_thermostat(const ThermostatSpec& spec, const Origin& origin) {
   }
 }
 
+void check_box(const std::vector<double>& box, SpaceKind kind, int dim, const Origin& origin, std::string_view key) {
+  if (kind != SpaceKind::euclidean) {
+    throw InputError(origin, key,
+                     "a periodic box is for a euclidean space (kind = \"euclidean\")" +
+                         std::string(kind == SpaceKind::hyperbolic
+                                         ? "; on a hyperbolic space give genus = g (a compact surface, dim = 2)"
+                                         : "; the sphere is compact and needs none"));
+  }
+  if (static_cast<int>(box.size()) != dim) {
+    throw InputError(origin, key,
+                     "expected an array of " + std::to_string(dim) + " numbers (the box's edges, one per axis of E^" +
+                         std::to_string(dim) + "), got " + std::to_string(box.size()) +
+                         (box.size() == 1 ? " number" : " numbers"));
+  }
+  for (std::size_t k = 0; k < box.size(); ++k) {
+    if (!(box[k] > 0.0) || !std::isfinite(box[k])) {
+      throw InputError(origin, std::string(key) + "[" + std::to_string(k + 1) + "]",
+                       "expected a finite edge > 0, got " + format_number(box[k]));
+    }
+  }
+}
+
+void check_genus(long genus, SpaceKind kind, int dim, const Origin& origin, std::string_view key) {
+  constexpr int most = sesi::HyperbolicSurface<double>::max_genus;
+  if (kind != SpaceKind::hyperbolic) {
+    throw InputError(origin, key,
+                     "a genus (a compact surface H^2/Gamma) is for a hyperbolic space (kind = \"hyperbolic\", dim = 2)" +
+                         std::string(kind == SpaceKind::euclidean ? "; on a euclidean space give box = [L1, ..., Ln]"
+                                                                  : "; the sphere is compact and needs none"));
+  }
+  if (dim != 2) {
+    throw InputError(origin, key,
+                     "a compact surface of genus g is 2-dimensional: expected dim = 2, got dim = " + std::to_string(dim));
+  }
+  if (genus < 2 || genus > most) {
+    throw InputError(origin, key,
+                     "expected an integer from 2 to " + std::to_string(most) +
+                         " (the genus of a compact hyperbolic surface; docs/topology.md), got " + std::to_string(genus));
+  }
+}
+
+double max_cutoff(const SpaceSpec& space) {
+  if (!space.box.empty()) {
+    return sesi::PeriodicBox<double, Eigen::Dynamic>(Eigen::Map<const Eigen::VectorXd>(
+                                                         space.box.data(), static_cast<Eigen::Index>(space.box.size())))
+        .max_cutoff();
+  }
+  if (space.genus != 0) return sesi::HyperbolicSurface<double>(space.genus, space.radius).max_cutoff();
+  return std::numeric_limits<double>::infinity();
+}
+
+std::string topology_noun(const SpaceSpec& space) {
+  if (!space.box.empty()) return "the periodic box";
+  return "the genus-" + std::to_string(space.genus) + " surface of radius " + format_number(space.radius);
+}
+
+void check_topology_potential(const PotentialSpec& spec, const SpaceSpec& space, const KeyPlace& place) {
+  if (!space.has_topology()) return;
+  const auto fail = [&](std::string_view key, const std::string& message) {
+    const auto [origin, path] = place(key);
+    throw InputError(origin, path, message);
+  };
+  const std::string kind(potential_kind(spec));
+  if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) {
+    const double largest = max_cutoff(space);
+    if (!(lj->cutoff <= largest)) {
+      fail("cutoff", "cutoff " + format_number(lj->cutoff) + " is too long for " + topology_noun(space) +
+                         " (a pair would meet two images of a body): the largest allowed cutoff is " +
+                         format_number(largest));
+    }
+    return;
+  }
+  if (std::holds_alternative<CentralCotangentSpec>(spec) || std::holds_alternative<FunctionExternalSpec>(spec)) {
+    fail("kind", "a " + kind + " potential is an external term, which " + topology_noun(space) +
+                     " does not support (a force centre has images too); only short-range pair terms (lennard-jones)");
+  }
+  fail("kind", "a " + kind + " potential has no cutoff, and on " + topology_noun(space) +
+                   " only short-range pair terms (lennard-jones, with a cutoff) are supported: a pair term without a "
+                   "range would sum over every image");
+}
+
+void check_topology_method(const Scene& scene, const Origin& origin, std::string_view key) {
+  if (!scene.space.has_topology()) return;
+  const std::string& method = scene.integrator.method;
+  if (method == "auto" || is_composition_method(method)) return;
+  throw InputError(origin, key,
+                   "on " + topology_noun(scene.space) + " the method must be a chart composition that is not processed (" +
+                       one_of(composition_method_names()) +
+                       ") or \"auto\": bodies are brought back into the domain between steps; got \"" +
+                       cut_input(method) + "\"");
+}
+
 void check_scene_model(const Scene& scene, const Origin& origin) {
   if (scene.space.dim < 1) throw InputError(origin, "space.dim", "expected an integer >= 1, got " + std::to_string(scene.space.dim));
   if (scene.space.kind != SpaceKind::euclidean) check_radius(scene.space.radius, origin, "space.radius");
+  if (!scene.space.box.empty()) check_box(scene.space.box, scene.space.kind, scene.space.dim, origin, "space.box");
+  if (scene.space.genus != 0) check_genus(scene.space.genus, scene.space.kind, scene.space.dim, origin, "space.genus");
   for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
     check_mass(scene.bodies[b].mass, origin, "bodies[" + std::to_string(b + 1) + "].mass");
   }
   for (std::size_t k = 0; k < scene.potentials.size(); ++k) {
     const std::string term = "potential[" + std::to_string(k + 1) + "].";
-    check_potential(scene.potentials[k],
-                    [&](std::string_view key) { return std::pair{origin, term + std::string(key)}; });
+    const KeyPlace place = [&](std::string_view key) { return std::pair{origin, term + std::string(key)}; };
+    check_potential(scene.potentials[k], place);
+    check_topology_potential(scene.potentials[k], scene.space, place);
   }
   const IntegratorSpec& in = scene.integrator;
   check_method(in.method, origin, "integrator.method");
+  check_topology_method(scene, origin, "integrator.method");
   if (!in.dt || !in.t_end) throw InputError(origin, "integrator", "missing dt or t_end");
   check_dt(*in.dt, origin, "integrator.dt");
   check_t_end(*in.t_end, origin, "integrator.t_end");

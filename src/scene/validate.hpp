@@ -8,6 +8,7 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 #include "errors.hpp"
 #include "scene.hpp"
@@ -110,6 +111,30 @@ void check_thermostat_method(const Scene& scene, const Origin& origin, std::stri
 /// The whole of a ThermostatSpec by the rules above (keys named "thermostat.KEY", all at origin):
 /// the kind, its schedule (times strictly increasing), its parameters.
 void check_thermostat(const ThermostatSpec& spec, const Origin& origin);
+
+// ---- topologies (issue #26; docs/topology.md): a periodic box on E^n, a compact surface H^2/Gamma ----
+
+/// box of [space]: only on a euclidean space, dim edges, each finite and > 0 (key "space.box",
+/// an edge "space.box[k]").
+void check_box(const std::vector<double>& box, SpaceKind kind, int dim, const Origin& origin, std::string_view key);
+/// genus of [space]: only on a hyperbolic space of dim 2, an integer from 2 to
+/// sesi::HyperbolicSurface<double>::max_genus.
+void check_genus(long genus, SpaceKind kind, int dim, const Origin& origin, std::string_view key);
+/// The largest pair cutoff the space's topology allows (sesi::PeriodicBox / HyperbolicSurface::
+/// max_cutoff(): beyond it a pair would meet two images, or one the neighbour search does not
+/// see); +inf without a topology. The space's box or genus must have passed the checks above.
+double max_cutoff(const SpaceSpec& space);
+/// "the periodic box" / "the genus-2 surface of radius 1.5" (for messages).
+std::string topology_noun(const SpaceSpec& space);
+/// A potential on a space with a topology: only short-range pair terms (lennard-jones), whose
+/// cutoff is at most max_cutoff(space). A pair term without a range (a sum over every image)
+/// and an external term (a force centre is not periodic) are refused. Nothing without a topology.
+void check_topology_potential(const PotentialSpec& spec, const SpaceSpec& space, const KeyPlace& place);
+/// A method on a space with a topology: a chart composition that is not processed (sesi2 ..
+/// sesi8-kahan-li: the integrator reduces the bodies into the domain between steps, which a
+/// processed kernel's variables or a geodesic method's embedding state do not allow), or "auto"
+/// (which then picks among those). Nothing without a topology.
+void check_topology_method(const Scene& scene, const Origin& origin, std::string_view key);
 
 /// A scene model that did not come from a scene file (a checkpoint's), by the rules the scene
 /// reader applies to one: the radius, the masses, the potentials and the integrator's settings

@@ -5,6 +5,8 @@ and a flat cell-list row per N for Lennard-Jones; with sesi2, a row per thermost
 sesi2+nose-hoover; issue #25) per (N, threads) and its ratio to the NVE sesi2 step in the summary; positive times; pairs per step equal to the
 pairs within the cutoff times the force evaluations per step (so ns_per_pair is what it says);
 and that bad options are refused with exit status 2, one line naming the option, nothing written.
+Topologies (issue #26): --box gives the E^2 box row and a LAMMPS row on the same bodies (when lmp is
+on PATH), --genus a row per genus and the E^2 box at the same N, with their ratios in the summary.
 Timings are not checked: speed targets live in the benchmark (docs/benchmarks.md)."""
 import argparse
 import csv
@@ -14,7 +16,7 @@ import subprocess
 import sys
 
 COLUMNS = ["n_bodies", "space", "dim", "potential", "method", "threads", "seconds_per_step",
-           "pairs_per_step", "ns_per_pair", "peak_rss_mb", "center_distance"]
+           "pairs_per_step", "ns_per_pair", "peak_rss_mb", "center_distance", "topology"]
 
 
 def read(path):
@@ -40,7 +42,9 @@ def main():
                          ("--center-distance", ["--center-distance", "2"]), ("--threads", ["--threads", "-1"]),
                          ("--center-distance", ["--space", "hyperbolic", "--center-distance", "0,x"]),
                          ("--center-distance", ["--space", "hyperbolic", "--center-distance", "31"]),
-                         ("--repeats", ["--repeats", "-1"])]:
+                         ("--repeats", ["--repeats", "-1"]), ("--box", ["--box"]),
+                         ("--genus", ["--space", "hyperbolic", "--genus", "1"]),
+                         ("--genus", ["--space", "hyperbolic", "--genus", "2", "--potential", "cotangent-gravity"])]:
         out = os.path.join(a.work, "scaling-bad")
         r = run(args, out)
         if r.returncode != 2 or len(r.stderr.strip().splitlines()) != 1 or option not in r.stderr or \
@@ -122,6 +126,34 @@ def main():
             counts = sorted({row["threads"] for row in rows if row["space"] == space})
             if counts != ["1", "2"]:
                 failures.append(f"{args}: thread counts {counts}")
+    # Topologies (issue #26): the rows in order, their figures, and the ratios of the summary.
+    lmp = shutil.which("lmp") is not None
+    for args, expected, ratios in [
+            (["--space", "euclidean", "--dim", "2", "--box", "--n", "300", "--steps", "5", "--threads", "1"],
+             [("euclidean", "2", "sesi2", "box")] + ([("lammps", "2", "velocity-verlet", "box")] if lmp else []),
+             ["/ LAMMPS (1 ranks)"] if lmp else []),
+            (["--space", "hyperbolic", "--dim", "2", "--genus", "2,3", "--n", "300", "--steps", "5"],
+             [("hyperbolic", "2", "sesi2", "genus 2"), ("hyperbolic", "2", "sesi2", "genus 3"),
+              ("euclidean", "2", "sesi2", "box")], ["/ E^2 box", "/ genus 2"])]:
+        out = os.path.join(a.work, "scaling-topology")
+        r = run(args, out)
+        sys.stderr.write(r.stderr)
+        if r.returncode != 0:
+            failures.append(f"{args}: exit {r.returncode}: {r.stderr.strip()}")
+            continue
+        fields, rows = read(os.path.join(out, "scaling.csv"))
+        got = [(row["space"], row["dim"], row["method"], row["topology"]) for row in rows]
+        if fields != COLUMNS or got != expected:
+            failures.append(f"{args}: columns {fields}, rows {got}, expected {expected}")
+            continue
+        for row in rows:
+            t, pairs, n = float(row["seconds_per_step"]), float(row["pairs_per_step"]), int(row["n_bodies"])
+            if not t > 0 or not (0.5 * n < pairs < 20 * n):
+                failures.append(f"{args}: {t} s per step, {pairs} Lennard-Jones pairs for {n} bodies in {row}")
+        for text in ratios:
+            if text not in r.stdout:
+                failures.append(f"{args}: no '{text}' ratio in the summary")
+
     for f in failures:
         print("FAIL:", f)
     print("ok" if not failures else f"{len(failures)} failure(s)")

@@ -104,3 +104,46 @@ def test_the_example_runs(program, source_dir, tmp_path):
     counts, msd_last, vacf0, saturation = map(float, r.stdout.split())
     assert counts > 0 and msd_last > 0 and vacf0 > 0
     assert saturation == pytest.approx(math.pi ** 2 / 2 - 2, rel=1e-13)  # the unit sphere's
+
+
+def test_topology_runs_and_arrays(program, tmp_path):
+    # A periodic box and a genus-2 surface (issue #26): a run directory gives its topology, image
+    # counts and words, and the numbers of `sesi analyze` bit for bit; arrays with box=/genus= and
+    # images=/words= give the same.
+    box = tmp_path / "box.toml"
+    box.write_text('[space]\nkind = "euclidean"\ndim = 2\nbox = [3.0, 4.0]\n'
+                   '[[bodies]]\nmass = 1.0\nq = [0.5, 3.9]\np = [0.7, -0.45]\n'
+                   '[[bodies]]\nmass = 2.0\nq = [2.9, 0.1]\np = [-0.4, 2.6]\n'
+                   '[integrator]\nmethod = "sesi2"\ndt = 0.05\nt_end = 10.0\noutput_every = 10\n')
+    r, phi = 0.3, 0.4
+    x = [math.sinh(r) * math.cos(phi), math.sinh(r) * math.sin(phi), math.cosh(r)]
+    v = [1.5 * math.cosh(r) * math.cos(phi), 1.5 * math.cosh(r) * math.sin(phi), 1.5 * math.sinh(r)]
+    surface = tmp_path / "surface.toml"
+    surface.write_text(f'[space]\nkind = "hyperbolic"\ndim = 2\nradius = 1.0\ngenus = 2\n'
+                       f'[[bodies]]\nmass = 1.0\nx = {x!r}\nv = {v!r}\n'
+                       '[integrator]\nmethod = "sesi2"\ndt = 0.01\nt_end = 6.0\noutput_every = 20\n')
+    for scene in (box, surface):
+        out = tmp_path / scene.stem
+        subprocess.run([program, "run", str(scene), "--out", str(out), "-q"], check=True, capture_output=True)
+        subprocess.run([program, "analyze", str(out), "--max-lag", "8", "--no-picture", "-q"], check=True,
+                       capture_output=True)
+        f = sa.read(out)
+        m = sa.msd(out, max_lag=8)
+        np.testing.assert_array_equal(m.value, columns(out / "msd.csv")["msd"])
+        np.testing.assert_array_equal(sa.rdf(out).g, columns(out / "rdf.csv")["g"])
+        if scene is box:
+            assert f.box == [3.0, 4.0] and f.genus is None and f.words is None
+            assert f.images.shape == (f.x.shape[0], 2, 2) and np.abs(f.images).max() >= 2
+            arrays = sa.msd(f.x, max_lag=8, space="euclidean", box=f.box, images=f.images, t=f.t)
+            assert sa.max_cutoff("euclidean", 2, box=f.box) == 1.5
+        else:
+            assert f.genus == 2 and f.box is None and f.images is None
+            assert len(f.words) == f.x.shape[0] and any(w[0] != "e" for w in f.words)
+            arrays = sa.msd(f.x, max_lag=8, space="hyperbolic", genus=2, words=f.words, t=f.t)
+            np.testing.assert_array_equal(sa.vacf(out, max_lag=8).value, columns(out / "vacf.csv")["vacf"])
+        np.testing.assert_array_equal(arrays.value, m.value)
+    # Beyond the largest cutoff, and a box's MSD without its image counts: InputError.
+    with pytest.raises(sesi.InputError, match="largest allowed cutoff is 1.5"):
+        sa.rdf(np.array([[0.5, 0.5], [1.0, 1.0]]), r_max=1.6, space="euclidean", box=[3.0, 4.0])
+    with pytest.raises(sesi.InputError, match="image counts"):
+        sa.msd(np.zeros((2, 1, 2)), space="euclidean", box=[3.0, 4.0])

@@ -17,6 +17,7 @@ import math
 import os
 import pathlib
 import random
+import re
 import shutil
 import signal
 import subprocess
@@ -667,6 +668,108 @@ values = [0.005, 0.004]
                 chord = math.dist([float(first[i + k]) for k in range(3)], [float(last[i + k]) for k in range(3)])
                 moved = max(moved, chord)
         check(moved > half_skin, f"run {run.name}: bodies moved at most {moved}, no Verlet-list rebuild")
+
+
+def box_scene(seed=2):
+    """20 Lennard-Jones bodies on a 5 x 4 lattice in a periodic 6 x 5 box of E^2 (issue #26), drifting
+    at (1.5, -1) with random velocities of deviation 0.5 about it: by t = 1 the outer columns and rows
+    (0.6 from a face) have crossed it, so the image counts change."""
+    rng = random.Random(seed)
+    lines = ['name = "lj-box"', "[space]", 'kind = "euclidean"', "dim = 2", "box = [6.0, 5.0]"]
+    for i in range(5):
+        for j in range(4):
+            lines += ["[[bodies]]", "mass = 1.0", f"x = [{0.6 + 1.2 * i!r}, {0.625 + 1.25 * j!r}]",
+                      f"v = [{1.5 + rng.gauss(0, 0.5)!r}, {-1.0 + rng.gauss(0, 0.5)!r}]"]
+    lines += ["[[potential]]", 'kind = "lennard-jones"', "sigma = 0.5", "cutoff = 1.25",
+              "[integrator]", 'method = "sesi4"', "dt = 0.005", "t_end = 1.0", "output_every = 20", ""]
+    return "\n".join(lines)
+
+
+def surface_scene():
+    """8 bodies on the genus-2 surface of radius 2 (issue #26), leaving the octagon through its sides
+    (they start 2.9 from its centre, moving outwards at unit speed; the inradius is 3.06)."""
+    radius = 2.0
+    lines = ['name = "genus"', "[space]", 'kind = "hyperbolic"', "dim = 2", f"radius = {radius!r}", "genus = 2"]
+    for k in range(8):
+        phi, d = 2 * math.pi * (k + 0.3) / 8, 2.9 / radius
+        x = [radius * math.sinh(d) * math.cos(phi), radius * math.sinh(d) * math.sin(phi), radius * math.cosh(d)]
+        v = [math.cosh(d) * math.cos(phi), math.cosh(d) * math.sin(phi), math.sinh(d)]
+        lines += ["[[bodies]]", "mass = 1.0", "x = [" + ", ".join(map(repr, x)) + "]",
+                  "v = [" + ", ".join(map(repr, v)) + "]"]
+    lines += ["[[potential]]", 'kind = "lennard-jones"', "sigma = 0.5", "cutoff = 1.25",
+              "[integrator]", 'method = "sesi4"', "dt = 0.005", "t_end = 0.5", "output_every = 10", ""]
+    return "\n".join(lines)
+
+
+@case
+def sweep_topology_keys(ctx):
+    """space.box and space.genus vary like any scene key (issue #26): each run's summary says its box or
+    genus, a larger box is a lower density, and a value the scene reader refuses (an edge that makes the
+    cutoff too long, genus 1) ends the sweep before anything runs, naming the run."""
+    ctx.write("box.toml", box_scene())
+    ctx.write("surface.toml", surface_scene())
+    box = ctx.write("box-sweep.toml", 'scene = "box.toml"\ntrajectory = true\n[[vary]]\nkey = "space.box"\n'
+                                      "values = [[6.0, 5.0], [8.0, 7.5]]\n")
+    out = ctx.work / "out-box"
+    expect_status(ctx.run("sweep", box, "--out", out, "-q"), 0, "sesi sweep over space.box")
+    table = rows(out)
+    check([(float(r["space.box.0"]), float(r["space.box.1"]), r["status"]) for r in table] ==
+          [(6.0, 5.0, "ok"), (8.0, 7.5, "ok")], f"sweep.csv: {table}")
+    for row, run in zip(table, run_dirs(out)):
+        space = json.loads((run / "summary.json").read_text())["space"]
+        check(space.get("box") == [float(row["space.box.0"]), float(row["space.box.1"])], f"{run.name}: {space}")
+        # The cutoff check's bound: half the shortest edge.
+        check(space.get("max_cutoff") == min(space["box"]) / 2, f"{run.name}: {space}")
+    expect_same_as_sesi_run(ctx, out)
+    surface = ctx.write("genus-sweep.toml", 'scene = "surface.toml"\ntrajectory = true\n[[vary]]\n'
+                                            'key = "space.genus"\nvalues = [2, 3]\n')
+    out = ctx.work / "out-genus"
+    expect_status(ctx.run("sweep", surface, "--out", out, "-q"), 0, "sesi sweep over space.genus")
+    cutoffs = []
+    for row, run in zip(rows(out), run_dirs(out)):
+        space = json.loads((run / "summary.json").read_text())["space"]
+        check(row["status"] == "ok" and space.get("genus") == int(row["space.genus"]), f"{run.name}: {row} {space}")
+        cutoffs.append(space["max_cutoff"])
+        header = (run / "trajectory.csv").read_text().splitlines()[0].split(",")
+        check("b1_word" in header and "b1_u3" in header, f"{run.name}: no word columns: {header}")
+    # At the same radius a larger genus has a larger polygon (inradius arccosh(cot(pi / 4g)) R).
+    check(cutoffs[0] < cutoffs[1], f"max_cutoff over genus 2, 3: {cutoffs}")
+    expect_same_as_sesi_run(ctx, out)
+    for name, sweep, message in (
+            ("edge", 'scene = "box.toml"\n[[vary]]\nkey = "space.box.1"\nvalues = [5.0, 2.0]\n', "run 0001"),
+            ("genus", 'scene = "surface.toml"\n[[vary]]\nkey = "space.genus"\nvalues = [2, 1]\n', "run 0001")):
+        path = ctx.write(f"bad-{name}.toml", sweep)
+        bad = ctx.work / f"out-bad-{name}"
+        expect_input_error(ctx.run("sweep", path, "--out", bad), message)
+        check(not bad.exists(), f"{name}: a refused sweep wrote {bad}")
+
+
+@case
+def sweep_mpi_box(ctx):
+    """A sweep of a periodic box's edges (issue #26) on 1 and 2 ranks: the same files (trajectories with
+    the image counts included), each as sesi run writes it."""
+    if not ctx.mpiexec:
+        raise Skip("sesi is built without MPI (SESI_BUILD_MPI, libopenmpi-dev)")
+    ctx.write("box.toml", box_scene())
+    sweep = ctx.write("box-sweep.toml", 'scene = "box.toml"\ntrajectory = true\n[[vary]]\nkey = "space.box"\n'
+                                        "values = [[6.0, 5.0], [7.0, 6.0]]\n")
+    trees = []
+    for ranks in (1, 2):
+        out = ctx.work / f"out-box-np{ranks}"
+        expect_status(ctx.run("sweep", sweep, "--out", out, ranks=ranks), 0, f"mpiexec -np {ranks} sesi sweep")
+        trees.append(file_tree(out))
+        if ranks == 2:
+            expect_same_as_sesi_run(ctx, out)
+    check(trees[0] == trees[1], "a box sweep's outputs depend on the number of ranks")
+    # Bodies crossed faces: some image count in the trajectories is not 0.
+    crossed = False
+    for name, data in trees[0][0].items():
+        if name.endswith("trajectory.csv"):
+            table = list(csv.reader(data.decode().splitlines()))
+            counts = [i for i, column in enumerate(table[0]) if re.fullmatch(r"b\d+_n\d", column)]
+            check(counts, f"{name}: no image-count columns in {table[0][:8]}")
+            crossed = crossed or any(row[i] != "0" for row in table[1:] for i in counts)
+    check(crossed, "no body crossed a face of the box: the sweep tests no image counts")
 
 
 LONG = 10_000_000  # the issue's 10 MB

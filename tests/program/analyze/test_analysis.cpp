@@ -1,18 +1,28 @@
 // The observables library (src/analysis, docs/observables.md): the exact shell measure, g(r) = 1
 // for an ideal gas on S^2, H^2 and E^2 by a chi-squared test at a fixed seed, the neighbour-cell
-// counts equal to the all-pairs counts, and the MSD and VACF of bodies on known geodesics.
+// counts equal to the all-pairs counts, and the MSD and VACF of bodies on known geodesics; on a
+// periodic box and a compact surface (issue #26) the same, by the minimum image and the unwrapped
+// positions, and the topology read from a run's files.
 #include <doctest/doctest.h>
+
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <sesi/spaces/hyperbolic.hpp>
+#include <sesi/topologies/hyperbolic_surface.hpp>
+#include <sesi/topologies/periodic_box.hpp>
 
 #include "analysis.hpp"
+#include "errors.hpp"
 
 namespace {
 
@@ -237,4 +247,299 @@ TEST_CASE("MSD and VACF of bodies on geodesics at constant speed") {
       if (std::abs(arc - pi * R) > 0.1) CHECK(std::abs(c.value[lag] / (R * R * w * w) - 1) < vacf_bound);
     }
   }
+}
+
+// ---- on a quotient: a periodic box of E^n, a compact surface H^2/Gamma (issue #26) ---------------
+
+namespace {
+
+SpaceSpec box_space(std::vector<double> edges) {
+  SpaceSpec s{SpaceKind::euclidean, static_cast<int>(edges.size()), 1.0};
+  s.box = std::move(edges);
+  return s;
+}
+
+SpaceSpec surface_space(int genus, double radius) {
+  SpaceSpec s{SpaceKind::hyperbolic, 2, radius};
+  s.genus = genus;
+  return s;
+}
+
+/// A uniform point of the box [0, L_1) x ... x [0, L_n).
+Eigen::VectorXd in_box(Uniform& u, const std::vector<double>& edges) {
+  Eigen::VectorXd x(static_cast<Eigen::Index>(edges.size()));
+  for (std::size_t k = 0; k < edges.size(); ++k) x(static_cast<Eigen::Index>(k)) = edges[k] * u();
+  return x;
+}
+
+/// A uniform point of the surface's polygon D: uniform in the disc of the circumradius about the
+/// origin (hyperbolic area measure, in_hyperbolic_disc), kept when it lies in D (rejection keeps
+/// the uniform measure restricted to D).
+Eigen::VectorXd in_polygon(Uniform& u, const sesi::HyperbolicSurface<double>& surface) {
+  while (true) {
+    const Eigen::Vector3d y = in_hyperbolic_disc(u, surface.radius(), surface.circumradius());
+    if (surface.outside(y) == 0.0) return y;
+  }
+}
+
+/// Pearson's statistic of two-body frames: the one unordered pair of each frame falls in bin k
+/// with probability shell_k / V, or beyond r_max with the rest: a multinomial over bins + 1
+/// categories, chi-squared with `bins` degrees of freedom. Exact on a quotient up to its largest
+/// cutoff, where the ball about a body embeds in the quotient (the covering space's shell is
+/// the quotient's).
+double two_body_statistic(const Rdf& rdf, long frames) {
+  double chi2 = 0, inside = 0, expected_inside = 0;
+  for (int k = 0; k < rdf.bins(); ++k) {
+    const double observed = rdf.counts()[k] / 2.0, expected = rdf.expected()[k] / 2;
+    chi2 += (observed - expected) * (observed - expected) / expected;
+    inside += observed;
+    expected_inside += expected;
+  }
+  const double rest = static_cast<double>(frames) - inside, expected_rest = static_cast<double>(frames) - expected_inside;
+  return chi2 + (rest - expected_rest) * (rest - expected_rest) / expected_rest;
+}
+
+}  // namespace
+
+TEST_CASE("ideal gas on an E^2 box and a genus-2 surface: g(r) = 1 up to the largest cutoff (chi-squared)") {
+  const int bins = 10;
+  {
+    const std::vector<double> edges{3.0, 4.0};
+    const SpaceSpec space = box_space(edges);
+    CHECK(sesi::analysis::max_cutoff(space) == 1.5);  // half the shorter edge
+    CHECK(sesi::analysis::total_volume(space) == 12.0);
+    const long frames = 20000;
+    Rdf rdf(space, 1.5, bins);
+    Uniform u(31);
+    Eigen::MatrixXd X(2, 2);
+    for (long f = 0; f < frames; ++f) {
+      X.col(0) = in_box(u, edges);
+      X.col(1) = in_box(u, edges);
+      rdf.accumulate(X);
+    }
+    CHECK(rdf.centres() == 2 * frames);  // every body is a shell centre
+    CHECK(rdf.expected()[0] > 200);      // pi 0.15^2 / 12 x 2 x 20000: 236 ordered pairs
+    CHECK(two_body_statistic(rdf, frames) < 23.21);  // chi-squared, 10 dof, 1 % critical value
+  }
+  {
+    const sesi::HyperbolicSurface<double> surface(2, 1.0);
+    const SpaceSpec space = surface_space(2, 1.0);
+    const double r_max = sesi::analysis::max_cutoff(space);
+    CHECK(r_max == surface.max_cutoff());
+    CHECK(std::abs(sesi::analysis::total_volume(space) / (4 * pi) - 1) < 1e-15);  // Gauss-Bonnet, 4 pi (g - 1) R^2
+    const long frames = 40000;
+    Rdf rdf(space, r_max, bins);
+    Uniform u(32);
+    Eigen::MatrixXd X(3, 2);
+    for (long f = 0; f < frames; ++f) {
+      X.col(0) = in_polygon(u, surface);
+      X.col(1) = in_polygon(u, surface);
+      rdf.accumulate(X);
+    }
+    CHECK(rdf.centres() == 2 * frames);
+    CHECK(rdf.expected()[0] > 30);  // 2 pi (cosh(r_max / 10) - 1) / 4 pi x 2 x 40000
+    CHECK(two_body_statistic(rdf, frames) < 23.21);  // chi-squared, 10 dof, 1 % critical value
+  }
+}
+
+TEST_CASE("g(r) on a quotient: the ghost images count exactly the minimum-image pairs of all pairs") {
+  Uniform u(33);
+  const auto same = [](const SpaceSpec& space, double r_max, const Eigen::MatrixXd& X) {
+    Rdf cells(space, r_max, 20), all(space, r_max, 20);
+    cells.accumulate(X);
+    all.accumulate_all_pairs(X);
+    CHECK(cells.counts() == all.counts());
+    CHECK(cells.expected() == all.expected());
+    long total = 0;
+    for (const auto c : cells.counts()) total += c;
+    CHECK(total > 1000);  // the test sees many pairs
+    return cells.counts();
+  };
+  for (const std::vector<double>& edges : {std::vector<double>{7.0, 9.0}, std::vector<double>{5.0, 6.0, 7.0}}) {
+    CAPTURE(edges.size());
+    const SpaceSpec space = box_space(edges);
+    const auto n = static_cast<Eigen::Index>(edges.size());
+    Eigen::MatrixXd X(n, 500);
+    for (int b = 0; b < 500; ++b) X.col(b) = in_box(u, edges);
+    const auto counts = same(space, sesi::analysis::max_cutoff(space), X);
+    same(space, 1.1, X);
+    // The same bodies given in other cells of the lattice: reduced into the box, the same pairs.
+    Eigen::MatrixXd moved = X;
+    for (int b = 0; b < 500; b += 3) moved(b % n, b) += (b % 2 ? 3.0 : -2.0) * edges[static_cast<std::size_t>(b % n)];
+    Rdf again(space, sesi::analysis::max_cutoff(space), 20);
+    again.accumulate(moved);
+    CHECK(again.counts() == counts);
+  }
+  for (const auto& shape : {std::pair{2, 2.0}, std::pair{3, 1.5}}) {
+    // (not a structured binding: CAPTURE's lambda cannot capture one under Clang 14)
+    const int genus = shape.first;
+    const double radius = shape.second;
+    CAPTURE(genus);
+    const sesi::HyperbolicSurface<double> surface(genus, radius);
+    const SpaceSpec space = surface_space(genus, radius);
+    Eigen::MatrixXd X(3, 300);  // all pairs try 1 + 4g (4g - 2) images each: few bodies suffice
+    for (int b = 0; b < 300; ++b) X.col(b) = in_polygon(u, surface);
+    same(space, sesi::analysis::max_cutoff(space), X);
+    same(space, 0.5 * sesi::analysis::max_cutoff(space), X);
+  }
+}
+
+TEST_CASE("g(r) on a quotient refuses r_max beyond the largest cutoff, naming it") {
+  const auto message = [](const SpaceSpec& space, double r_max) {
+    try {
+      Rdf rdf(space, r_max, 10);
+    } catch (const sesi::program::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string box = message(box_space({3.0, 4.0}), 1.6);
+  CHECK(box.find("--rdf-max") != std::string::npos);
+  CHECK(box.find("the largest allowed cutoff is 1.5") != std::string::npos);
+  const SpaceSpec surface = surface_space(2, 1.0);
+  const double top = sesi::analysis::max_cutoff(surface);
+  CHECK(message(surface, top * (1 + 1e-12)).find("the largest allowed cutoff is " + sesi::program::format_number(top)) !=
+        std::string::npos);
+  CHECK(message(surface, top).empty());
+}
+
+TEST_CASE("MSD on a box and on a genus-2 surface: bodies moving freely across sides have MSD (v t)^2") {
+  const int count = 120;
+  const double dt = 0.5;
+  {
+    // Straight lines u(t) = u0 + v t in E^2, kept in the box by PeriodicBox::reduce with their
+    // image counts, as a run keeps them.
+    const std::vector<double> edges{3.0, 4.0};
+    const sesi::PeriodicBox<double, Eigen::Dynamic> box(Eigen::Vector2d(3.0, 4.0));
+    sesi::analysis::Frames frames;
+    frames.space = box_space(edges);
+    const Eigen::Vector2d v0(0.7, -0.45), v1(-0.2, 1.3), u0(0.5, 3.9), u1(2.9, 0.1);
+    double largest = 0;  // the largest unwrapped coordinate
+    for (int k = 0; k < count; ++k) {
+      Eigen::MatrixXd x(2, 2);
+      sesi::analysis::ImageCounts n = sesi::analysis::ImageCounts::Zero(2, 2);
+      x.col(0) = u0 + v0 * (k * dt);
+      x.col(1) = u1 + v1 * (k * dt);
+      largest = std::max(largest, x.cwiseAbs().maxCoeff());
+      for (int b = 0; b < 2; ++b) {
+        auto col = x.col(b);
+        box.reduce(col, n.col(b));
+      }
+      frames.t.push_back(k * dt);
+      frames.x.push_back(x);
+      frames.images.push_back(n);
+    }
+    CHECK(frames.images.back().cwiseAbs().maxCoeff() >= 15);  // many crossings
+    const auto m = sesi::analysis::msd(frames, count - 1);
+    // Each coordinate x = u - L n carries the rounding of u and of the reduction, 2 eps |u| at
+    // most, so each unwrapped difference (x_p - x_o) + L (n_p - n_o) is within 8 eps U of the
+    // exact one (U the largest coordinate); d^2 is then within 2 sqrt(2) 8 eps U / d relative
+    // (plus its square), d >= the smaller speed x dt at lag 1.
+    const double d_min = std::min(v0.norm(), v1.norm()) * dt;
+    const double bound = 2 * std::sqrt(2.0) * 8 * 0x1p-52 * largest / d_min;
+    for (int lag = 1; lag < count; ++lag) {
+      CAPTURE(lag);
+      const double t = lag * dt;
+      const double exact = (v0.squaredNorm() + v1.squaredNorm()) * t * t / 2;
+      CHECK(std::abs(m.value[lag] / exact - 1) < bound);
+    }
+    // Without the counts there is no MSD on a box.
+    frames.images.clear();
+    CHECK_THROWS_AS(sesi::analysis::msd(frames), sesi::program::InputError);
+  }
+  {
+    // A geodesic of H^2 at speed R w, u(t) = R (sinh(wt + s0) cos a - ..., cosh(wt + s0)) through a
+    // point off the origin (a boost B), kept in the polygon by reduce with its word W (u = W x),
+    // as a run keeps it (HyperbolicSurface::append_inverse); its velocity carried along.
+    const double R = 1.0, w = 0.1;
+    const sesi::HyperbolicSurface<double> surface(2, R);
+    sesi::analysis::Frames frames;
+    frames.space = surface_space(2, R);
+    const sesi::Hyperbolic<Eigen::Dynamic> chart(R, 2);
+    Eigen::MatrixXd boost;
+    chart.boost_to(Eigen::VectorXd(Eigen::Vector3d(0.3, -0.4, std::sqrt(1 + 0.25) * R)), boost);
+    const double angle = 0.7;
+    const Eigen::Vector3d direction(std::cos(angle), std::sin(angle), 0);
+    int crossings = 0;
+    for (int k = 0; k < count; ++k) {
+      const double s = w * k * dt - 3.0;
+      Eigen::Vector3d u = boost * (direction * std::sinh(s) + Eigen::Vector3d(0, 0, std::cosh(s))) * R;
+      Eigen::Vector3d v = boost * (direction * std::cosh(s) + Eigen::Vector3d(0, 0, std::sinh(s))) * (R * w);
+      sesi::HyperbolicSurface<double>::Word applied, word;
+      surface.reduce(u, applied);
+      for (const auto a : applied) v = (surface.generator(a) * v).eval();
+      surface.append_inverse(word, applied);
+      if (!frames.words.empty() && frames.words.back()[0] != word) ++crossings;
+      frames.t.push_back(k * dt);
+      frames.x.emplace_back(Eigen::MatrixXd(u));
+      frames.v.emplace_back(Eigen::MatrixXd(v));
+      frames.words.push_back({word});
+    }
+    CHECK(crossings >= 3);  // the body crossed several sides
+    const auto m = sesi::analysis::msd(frames, count - 1);
+    const auto c = sesi::analysis::vacf(frames, count - 1);
+    // At lag t the later point carried next to the earlier one, W_o^{-1} W_p x_p, lies within
+    // arc + r_c of the origin (x_o is in D, within the circumradius r_c), so it and every product
+    // of the chain that makes it (u, the reduction's generators, W_o^{-1} W_p) have entries of
+    // size S = R cosh((arc + r_c) / R), each rounding to a few eps of S: the distance is within
+    // 8 eps S of arc, so d^2 within 16 eps S / arc relative. The VACF's Minkowski products of
+    // vectors of size S cancel down to (R w)^2: within 16 eps (S / R)^2 relative.
+    for (int lag = 1; lag < count; ++lag) {
+      CAPTURE(lag);
+      const double arc = R * w * lag * dt, size = R * std::cosh((arc + surface.circumradius()) / R);
+      CHECK(std::abs(m.value[lag] / (arc * arc) - 1) < 16 * 0x1p-52 * size / arc);
+      CHECK(std::abs(c.value[lag] / (R * R * w * w) - 1) < 16 * 0x1p-52 * (size / R) * (size / R));
+    }
+    frames.words.clear();
+    CHECK_THROWS_AS(sesi::analysis::msd(frames), sesi::program::InputError);
+  }
+}
+
+TEST_CASE("a run's box or genus, image counts and words are read from summary.json and trajectory.csv") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("sesi-test-analysis-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const auto write = [&](const std::string& name, const std::string& text) { std::ofstream(dir / name) << text; };
+  // E^1 box of edge 2: one body at x = 1.5 with image count -1, then 0.5 with count 3.
+  write("summary.json",
+        R"({"complete": true, "space": {"kind": "euclidean", "dim": 1, "box": [2.0], "max_cutoff": 1.0},)"
+        R"( "bodies": 1, "trajectory": "trajectory.csv", "masses": [2.0]})");
+  write("trajectory.csv", "t,b1_q1,b1_p1,b1_x1,b1_n1\n0,1.5,0.5,1.5,-1\n1,0.5,0.5,0.5,3\n");
+  {
+    const auto info = sesi::analysis::read_run_info(dir);
+    CHECK(info.space.box == std::vector<double>{2.0});
+    const auto frames = sesi::analysis::read_frames(dir, info, {});
+    REQUIRE(frames.images.size() == 2);
+    CHECK(frames.images[0](0, 0) == -1);
+    CHECK(frames.images[1](0, 0) == 3);
+    const auto m = sesi::analysis::msd(frames, 1);
+    CHECK(m.value[1] == 49.0);  // (0.5 + 2 x 3) - (1.5 - 2) = 7: exact in binary
+  }
+  // Genus 2, R = 1: the origin with the identity, then the same point with the word g_0 g_5
+  // ("1.6"): the body's unwrapped point moved from o to g_0 g_5 o.
+  write("summary.json",
+        R"({"complete": true, "space": {"kind": "hyperbolic", "dim": 2, "radius": 1.0, "genus": 2},)"
+        R"( "bodies": 1, "trajectory": "trajectory.csv"})");
+  write("trajectory.csv",
+        "t,b1_q1,b1_q2,b1_p1,b1_p2,b1_x1,b1_x2,b1_x3,b1_u1,b1_u2,b1_u3,b1_word\n"
+        "0,0,0,0,0,0,0,1,0,0,1,e\n1,0,0,0,0,0,0,1,0,0,1,1.6\n");
+  {
+    const auto info = sesi::analysis::read_run_info(dir);
+    CHECK(info.space.genus == 2);
+    const auto frames = sesi::analysis::read_frames(dir, info, {});
+    REQUIRE(frames.words.size() == 2);
+    CHECK(frames.words[1][0] == sesi::analysis::Word{0, 5});
+    CHECK(sesi::analysis::word_text(frames.words[1][0]) == "1.6");
+    const sesi::HyperbolicSurface<double> surface(2, 1.0);
+    const Eigen::Vector3d o(0, 0, 1), moved = surface.element({0, 5}) * o;
+    const double exact = std::acosh(moved(2));  // d(o, y) = acosh(y_0 / R) from the origin
+    const auto m = sesi::analysis::msd(frames, 1);
+    CHECK(std::abs(std::sqrt(m.value[1]) / exact - 1) < 1e-13);  // acosh of entries ~30: a few eps of each product
+  }
+  // A word that is not one: one line naming it.
+  write("trajectory.csv",
+        "t,b1_q1,b1_q2,b1_p1,b1_p2,b1_x1,b1_x2,b1_x3,b1_u1,b1_u2,b1_u3,b1_word\n0,0,0,0,0,0,0,1,0,0,1,9\n");
+  CHECK_THROWS_AS(sesi::analysis::read_frames(dir, sesi::analysis::read_run_info(dir), {}), sesi::program::InputError);
+  fs::remove_all(dir);
 }

@@ -5,7 +5,9 @@
 
 Runs one scene twice, with --trajectory-format csv and h5md, checks the H5MD 1.1 structure of
 trajectory.h5 and that every number in it equals trajectory.csv (and the energies of
-diagnostics.csv) exactly: both hold the same doubles, the CSV in round-trip form. Then checks
+diagnostics.csv) exactly: both hold the same doubles, the CSV in round-trip form. Likewise a run
+on an E^2 periodic box (box edges, boundary "periodic", the image counts) and one on the genus-2
+surface (its attributes, unwrapped points and words). Then checks
 that an h5md run replaces an earlier output directory as a whole (no trajectory.csv left).
 Exit status 0 passes, anything else fails.
 """
@@ -111,6 +113,116 @@ def check_file(h5_path, csv_dir, summary):
     return frames
 
 
+# Runs on a topology (issue #26): an E^2 box of free bodies, and the Bolza surface (genus 2).
+BOX_SCENE = """name = "h5md-box"
+[space]
+kind = "euclidean"
+dim = 2
+box = [3.0, 2.0]
+[[bodies]]
+mass = 1.0
+q = [1.0, 1.0]
+p = [1.3, 0.7]
+[[bodies]]
+mass = 2.0
+q = [0.2, 1.9]
+p = [-1.8, 4.2]
+[integrator]
+dt = 0.01
+t_end = 10.0
+output_every = 20
+"""
+
+SURFACE_SCENE = """name = "h5md-surface"
+[space]
+kind = "hyperbolic"
+dim = 2
+radius = 2.0
+genus = 2
+[[bodies]]
+mass = 1.0
+q = [0.3, 0.4]
+p = [1.1, 0.6]
+[[bodies]]
+mass = 1.0
+q = [0.5, 2.0]
+p = [-0.4, 1.3]
+[integrator]
+dt = 0.01
+t_end = 12.0
+output_every = 20
+"""
+
+
+def check_topology_file(h5_path, csv_dir, summary):
+    """trajectory.h5 of a run on a topology against trajectory.csv: the box (or surface) and the
+    image record, number for number and word for word."""
+    rows = (csv_dir / "trajectory.csv").read_text().splitlines()
+    header, lines = rows[0].split(","), [line.split(",") for line in rows[1:]]
+    space = summary["space"]
+    dim, n = space["dim"], summary["bodies"]
+    box = "box" in space
+    ambient = dim if box else dim + 1
+    per_body = 2 * dim + ambient + (dim if box else ambient + 1)
+    check(len(header) == 1 + n * per_body, f"CSV header {header}")
+    with h5py.File(h5_path, "r") as f:
+        group = f["particles/all/box"]
+        check(int(group.attrs["dimension"]) == ambient, f"box dimension {group.attrs['dimension']}")
+        boundary = [text(b) for b in group.attrs["boundary"]]
+        step = f["particles/all/position/step"]
+        x = f["particles/all/position/value"][()]
+        check(x.shape == (len(lines), n, ambient), f"position {x.shape}")
+        for k, row in enumerate(lines):
+            for b in range(n):
+                base = 1 + b * per_body + 2 * dim
+                check(x[k, b].tolist() == [float(v) for v in row[base:base + ambient]], f"x differs at frame {k}, body {b + 1}")
+        if box:
+            check(boundary == ["periodic"] * dim, f"box boundary {boundary}")
+            check(group["edges"][()].tolist() == space["box"], f"box edges {group['edges'][()]}")
+            image = f["particles/all/image"]
+            check(image["value"].dtype.kind == "i" and image["value"].shape == (len(lines), n, dim),
+                  f"image {image['value'].shape} {image['value'].dtype}")
+            check(image["step"].id == step.id, "image: step is not the position's")
+            values = image["value"][()]
+            for k, row in enumerate(lines):
+                for b in range(n):
+                    base = 1 + b * per_body + 2 * dim + ambient
+                    check(values[k, b].tolist() == [int(c) for c in row[base:base + dim]],
+                          f"image differs at frame {k}, body {b + 1}")
+            check(any(values.ravel()), "no body crossed a side: the image counts were not put to the test")
+        else:
+            check(boundary == ["none"] * ambient, f"box boundary {boundary}")
+            check(text(group.attrs["sesi_topology"]) == "hyperbolic-surface" and int(group.attrs["genus"]) == space["genus"]
+                  and float(group.attrs["radius"]) == space["radius"], f"surface attributes {dict(group.attrs)}")
+            unwrapped, word = f["particles/all/unwrapped_position"], f["particles/all/word"]
+            check(unwrapped["value"].shape == (len(lines), n, ambient) and word["value"].shape == (len(lines), n),
+                  f"unwrapped_position {unwrapped['value'].shape}, word {word['value'].shape}")
+            check(unwrapped["step"].id == step.id and word["time"].id == f["particles/all/position/time"].id,
+                  "unwrapped_position, word: step and time are not the position's")
+            u, words = unwrapped["value"][()], word["value"][()]
+            for k, row in enumerate(lines):
+                for b in range(n):
+                    base = 1 + b * per_body + 2 * dim + ambient
+                    check(u[k, b].tolist() == [float(v) for v in row[base:base + ambient]],
+                          f"unwrapped_position differs at frame {k}, body {b + 1}")
+                    w = words[k, b]
+                    check((w.decode() if isinstance(w, bytes) else w) == row[base + ambient],
+                          f"word differs at frame {k}, body {b + 1}: {w!r} against {row[base + ambient]!r}")
+            check(any((w.decode() if isinstance(w, bytes) else w) != "e" for w in words.ravel()),
+                  "no body crossed a side: the words were not put to the test")
+
+
+def check_topologies(sesi, work):
+    for name, scene_text in [("box", BOX_SCENE), ("surface", SURFACE_SCENE)]:
+        scene = work / f"{name}.toml"
+        scene.write_text(scene_text)
+        csv_dir, h5_dir = work / f"{name}-csv", work / f"{name}-h5md"
+        run(sesi, "run", scene, "--quiet", "--out", csv_dir)
+        run(sesi, "run", scene, "--quiet", "--trajectory-format", "h5md", "--out", h5_dir)
+        summary = json.loads((h5_dir / "summary.json").read_text())
+        check_topology_file(h5_dir / "trajectory.h5", csv_dir, summary)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--sesi", required=True)
@@ -159,7 +271,9 @@ def main():
     run(args.sesi, "run", scene, *ARGS, "--out", csv_dir)
     names = sorted(p.name for p in csv_dir.iterdir())
     check(names == ["diagnostics.csv", "sesi-manifest.txt", "summary.json", "trajectory.csv"], f"replaced outputs: {names}")
-    print(f"check_h5md.py: {SCENE}, {frames} frames: trajectory.h5 equals trajectory.csv")
+    check_topologies(args.sesi, work)
+    print(f"check_h5md.py: {SCENE}, {frames} frames: trajectory.h5 equals trajectory.csv; so do a box's and a "
+          "surface's, with their image counts and words")
 
 
 if __name__ == "__main__":
