@@ -12,10 +12,11 @@ JOBS        ?= $(shell nproc)
 # library needs Eigen alone, sesi/thermostat.hpp adds Random123).
 # lammps (run as the program `lmp`, never linked) the flat-space peer: tests/lammps compares forces and
 # NVE energy traces of periodic Lennard-Jones boxes with it, and `sesi bench --scaling` times it.
+# chromium (headless) opens the pages of `sesi view` in tests/view and draws the viewer's figures.
 APT_PACKAGES := cmake g++ make libeigen3-dev libboost-dev doctest-dev libtomlplusplus-dev \
                 libcli11-dev python3-matplotlib clang libclang-rt-14-dev libbenchmark-dev \
                 libhdf5-dev python3-h5py python3-dev python3-numpy pybind11-dev python3-pytest \
-                libopenmpi-dev openmpi-bin librandom123-dev lammps
+                libopenmpi-dev openmpi-bin librandom123-dev lammps chromium
 
 .PHONY: deps configure build test demo clean fuzz figures microbench sweep-example
 
@@ -114,6 +115,8 @@ figures: deps
 	  --figure docs/figures/lj-quench-g-r.png | tee $(BENCH_OUT)/lj-quench-report.txt
 	@# Topologies (issue #26): the Bolza surface's octagon with the liquid of examples/scenes/bulk-lj-bolza.toml.
 	$(PYTHON3) tools/topology_figure.py figure docs/figures/topology-bolza.png --sesi $(BENCH_DIR)/src/sesi --work $(BENCH_OUT)/topology-bolza
+	@# The viewer (issue #28): docs/figures/view-*.png, screenshots of `sesi view`'s pages in headless Chromium.
+	$(PYTHON3) tools/view_figures.py --sesi $(BENCH_DIR)/src/sesi --work $(BENCH_OUT)/view-figures --out docs/figures
 	@# Sweeps (issue #16): the chaos map of docs/sweeps.md.
 	$(MAKE) --no-print-directory sweep-example RELEASE_DIR=$(BENCH_DIR)
 

@@ -132,10 +132,12 @@ py::dict thermostat_dict(const sesi::program::ThermostatSpec& th) {
 }  // namespace
 
 void sesi_bind_analysis(py::module_& m);  // analysis.cpp: g(r), MSD, VACF (sesi.analysis)
+void sesi_bind_view(py::module_& m);      // view.cpp: the viewer page (sesi.view, Simulation.view)
 
 PYBIND11_MODULE(_sesi, m) {
   m.doc() = "sesi's compiled core; use the package `sesi` (docs/python.md).";
   sesi_bind_analysis(m);
+  sesi_bind_view(m);
 
   static py::exception<sesi::program::InputError> input_error(m, "InputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {

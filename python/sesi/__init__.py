@@ -24,9 +24,11 @@ from ._sesi import potentials as _potentials
 from ._sesi import thermostat_keys as _thermostat_keys
 from ._sesi import thermostat_kinds as _thermostat_kinds
 from . import analysis  # g(r), MSD, VACF as NumPy arrays (docs/observables.md)
+from .view import View, view  # the viewer page (docs/view.md); the function shadows the submodule's name
+from .view import _simulation_view
 
-__all__ = ["Simulation", "Thermostat", "InputError", "InstabilityError", "methods", "potentials", "thermostats",
-           "paper_exact"]
+__all__ = ["Simulation", "Thermostat", "InputError", "InstabilityError", "View", "methods", "potentials",
+           "thermostats", "paper_exact", "view"]
 
 InputError.__doc__ = """Bad input: a scene key, a value, a setting. A ValueError whose message is the
 one line `sesi run` prints for the same mistake (with the key path, e.g. bodies[2].x)."""
@@ -168,6 +170,8 @@ class Simulation:
         self._source = source
         self._functions = []  # (value, gradient) of the Python potentials
         self._core = None
+        self._last_rows = None  # the last run()'s rows and why it stopped ("" when complete), for view()
+        self._last_status = ""
 
     # ---- building ------------------------------------------------------------------------
 
@@ -368,8 +372,21 @@ class Simulation:
         unwrapped_points (rows x bodies x ambient), and image_counts (rows x bodies x n, int64) in a
         box or words (a list per row of the bodies' words) on a surface, as trajectory.csv's columns."""
         report, out = self._start().run(float(t_end), int(output_every))
+        self._last_rows, self._last_status = out, ""
         self._raise(report, out)
         return out
+
+    def view(self, rows=None, *, max_frames=1000, precision="auto", title=None):
+        """The viewer page (a sesi.View) of rows, a dict that run() returned; by default of the
+        last run()'s rows (with its failure in a banner when it raised InstabilityError), or,
+        before any run, of the current state as one frame. Thinned evenly to at most max_frames
+        frames (the first and last kept); precision "auto", 32 or 64 as sesi.view's; title: the
+        page's title (default: the scene's name). Speeds come from v and the masses, jumps from
+        the image counts or words, the diagnostics from every row's energy."""
+        status = ""
+        if rows is None and self._last_rows is not None:
+            rows, status = self._last_rows, self._last_status
+        return _simulation_view(self, rows, max_frames, precision, title, status)
 
     def _raise(self, report, out):
         if report.complete:
@@ -378,6 +395,8 @@ class Simulation:
             raise KeyboardInterrupt
         message = (f"{report.detail} at step {report.failed_step} (t = {report.failed_t:.6g}); the "
                    f"simulation is at its last good state, step {self.step} (t = {self.t:.6g})")
+        if out is not None:
+            self._last_status = message  # the last run's rows stop here (Simulation.view's banner)
         raise InstabilityError(message, reason=report.reason, detail=report.detail, step=report.failed_step,
                                t=report.failed_t, body=report.failed_body, output=out)
 

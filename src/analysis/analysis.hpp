@@ -210,11 +210,15 @@ struct RunInfo {
   std::string trajectory;  ///< "trajectory.csv" or "trajectory.h5"
   std::vector<double> masses;
   long bodies = 0;
+  bool complete = true;            ///< summary.json's "complete"
+  std::string status;              ///< an unfinished run's stop reason and failure message
+  std::string source;              ///< the scene file as the run was given it
+  std::vector<std::string> potentials;  ///< the potentials' kinds
 };
 
 /// Reads dir/summary.json; throws InputError naming dir when it is missing, not sesi's, or says
-/// the run is unfinished ("complete": false).
-RunInfo read_run_info(const std::filesystem::path& dir);
+/// the run is unfinished ("complete": false) unless allow_incomplete (`sesi view` shows one).
+RunInfo read_run_info(const std::filesystem::path& dir, bool allow_incomplete = false);
 
 /// The frames of dir's trajectory (trajectory.csv, or trajectory.h5 in a build with HDF5)
 /// between from and to: embedding points as written (on a quotient: in the domain, with the

@@ -445,7 +445,7 @@ Frames read_h5md(const fs::path& path, const RunInfo& info, const ReadOptions& o
 
 }  // namespace
 
-RunInfo read_run_info(const fs::path& dir) {
+RunInfo read_run_info(const fs::path& dir, bool allow_incomplete) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) refuse(dir, "not a directory (expected a sesi run's output directory)");
   const fs::path path = dir / "summary.json";
@@ -459,12 +459,30 @@ RunInfo read_run_info(const fs::path& dir) {
   }
   const Json* complete = json.find("complete");
   if (!complete || complete->kind != Json::Kind::boolean) refuse(path, "not a sesi summary (no \"complete\")");
-  if (!complete->boolean) {
+  if (!complete->boolean && !allow_incomplete) {
     const Json* reason = json.find("stop_reason");
     refuse(dir, "holds an unfinished run (" + (reason ? reason->string : std::string("incomplete")) +
                     "): finish it with sesi resume, or analyse a complete run");
   }
   RunInfo info;
+  info.complete = complete->boolean;
+  if (!info.complete) {
+    // What stopped it: the stop reason, and the failure's message when there is one.
+    const Json* reason = json.find("stop_reason");
+    info.status = reason && reason->kind == Json::Kind::string ? reason->string : std::string("incomplete");
+    const Json* failure = json.find("failure");
+    const Json* message = failure ? failure->find("message") : nullptr;
+    // The failure's message usually begins with the reason already ("energy error exceeded: |E - E0| ...").
+    if (message && message->kind == Json::Kind::string && !message->string.empty()) {
+      info.status = message->string.starts_with(info.status) ? message->string : info.status + ": " + message->string;
+    }
+  }
+  if (const Json* source = json.find("source"); source && source->kind == Json::Kind::string) info.source = source->string;
+  if (const Json* potentials = json.find("potentials"); potentials && potentials->kind == Json::Kind::array) {
+    for (const Json& p : potentials->items) {
+      if (p.kind == Json::Kind::string) info.potentials.push_back(p.string);
+    }
+  }
   const Json* space = json.find("space");
   const Json* kind = space ? space->find("kind") : nullptr;
   const Json* dim = space ? space->find("dim") : nullptr;
@@ -543,6 +561,9 @@ Frames read_frames(const fs::path& dir, const RunInfo& info, const ReadOptions& 
     frames = read_csv(dir / info.trajectory, info, options);
   }
   if (frames.x.empty()) {
+    const bool window = options.from != -std::numeric_limits<double>::infinity() ||
+                        options.to != std::numeric_limits<double>::infinity();
+    if (!window) refuse(dir / info.trajectory, "holds no frame (the run wrote none)");
     throw InputError(Origin{}, "--from", "no frame of " + (dir / info.trajectory).string() + " lies in the times asked for");
   }
   return frames;

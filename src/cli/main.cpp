@@ -13,6 +13,7 @@
 #include "run_command.hpp"
 #include "signals.hpp"
 #include "sweep_command.hpp"
+#include "view_command.hpp"
 
 namespace {
 
@@ -86,7 +87,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.footer("\nRun 'sesi run --help' for scenes, methods, outputs and exit statuses; 'sesi sweep --help'\n"
              "for many variants of a scene at once, on all cores or MPI ranks (docs/sweeps.md); 'sesi analyze\n"
-             "--help' for g(r), MSD and VACF of a finished run (docs/observables.md).");
+             "--help' for g(r), MSD and VACF of a finished run (docs/observables.md); 'sesi view --help' for\n"
+             "a run in the browser (docs/view.md).");
 
   RunOptions options;
   std::string method;
@@ -174,6 +176,8 @@ int main(int argc, char** argv) {
   CLI::App* sweep = add_sweep_subcommand(app, sweep_options);
   AnalyzeOptions analyze_options;
   CLI::App* analyze = add_analyze_subcommand(app, analyze_options);
+  ViewOptions view_options;
+  CLI::App* view = add_view_subcommand(app, view_options);
 
   try {
     app.parse(argc, argv);
@@ -217,6 +221,7 @@ int main(int argc, char** argv) {
     if (bench->parsed()) return bench_command(bench_options);
     if (sweep->parsed()) return sweep_command(sweep_options);
     if (analyze->parsed()) return analyze_command(analyze_options);
+    if (view->parsed()) return view_command(view_options);
     if (resume->parsed()) return resume_command(resume_options);
     return run_command(options);
   } catch (const InputError& e) {
