@@ -251,6 +251,14 @@ def poincare(x, R):
     return [c / (R + x[-1]) for c in x[:-1]]
 
 
+def pole_turn(x, k, sign):
+    """The quarter turn in the (x_k, x_last) plane that takes sign R e_k to the north pole R e_last:
+    y_last' = sign y_k, y_k' = -sign y_last (the other coordinates unchanged)."""
+    y = list(x)
+    y[-1], y[k] = sign * x[k], -sign * x[-1]
+    return y
+
+
 def cayley(x, R):
     """Upper half-plane: w = i (1 + u) / (1 - u), u the disc point (CFKP 1997, section 7)."""
     u = complex(*poincare(x, R))
@@ -520,6 +528,15 @@ def s2_stereographic(ctx):
           f"?{query}: the north-pole body at {st['screen'][0][:2]}, the origin is {st['origin']}")
     expect_positions(st, planar(lambda x: poincare(x, S2_R), xs), query, "stereographic")
     expect_pixels(ctx, page, query, st, "stereographic")
+    # A chosen pole, +x1 (`pole=1`): the quarter turn in the (x1, x3) plane taking R e1 to R e3 (y3' = y1,
+    # y1' = -y3) first; a bad pole gets a banner.
+    query = f"frame={k}&projection=stereographic&pole=1"
+    st = ctx.state(page, query)
+    expect_drawn(st, k, t, query)
+    expect_positions(st, planar(lambda x: poincare(pole_turn(x, 0, +1), S2_R), xs), query, "stereographic, pole +x1")
+    query = f"frame={k}&pole=7"
+    st = ctx.state(page, query)
+    check(any("pole=7" in m for m in st["messages"]), f"?{query}: no banner for a bad pole: {st['messages']}")
 
 
 @case
@@ -688,6 +705,13 @@ def s3_stereographic(ctx):
     expect_drawn(st, k, t, query)
     check(st["projection"] == "stereographic" and st["space"] == "S^3", f"?{query}: {st['space']} {st['projection']}")
     expect_positions(st, spatial(lambda x: poincare(x, R), xs, st["camera"]), query, "S^3 stereographic")
+    # A chosen pole, -x1: the view turns the sphere by the quarter turn in the (x1, x4) plane that takes -R e1
+    # to the north pole R e4 (y4' = -y1, y1' = y4), then projects from the new south pole.
+    query = f"frame={k}&pole=-1"
+    st = ctx.state(page, query)
+    expect_drawn(st, k, t, query)
+    expect_positions(st, spatial(lambda x: poincare(pole_turn(x, 0, -1), R), xs, st["camera"]), query,
+                     "S^3 stereographic, pole -x1")
 
 
 @case

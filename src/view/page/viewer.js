@@ -281,6 +281,35 @@
     const sel = $('projection');
     if (sel) sel.value = name;
     $('recentre').hidden = view.dims !== 2 || meta.space.kind === 'euclidean' && !meta.space.box;
+    if (pole) setPole(pole);  // a new projection keeps the chosen pole
+  }
+
+  // The pole of S^n's views (the point drawn at the centre; stereographic projection is from its
+  // antipode): an axis point +-R e_k of the embedding, as "+k" / "-k" (1-based); the north pole
+  // +R e_{n+1} is the default (pole = ''). A body picked as the centre replaces it (pole = '').
+  let pole = '';
+  function poleSpecs() {
+    if (!meta || meta.space.kind !== 'sphere' || A < 2) return [];
+    const out = [];
+    for (let k = A; k >= 1; k--) out.push('+' + k, '-' + k);
+    return out;
+  }
+  function poleLabel(spec) {
+    const north = spec === '+' + A ? ' (north)' : spec === '-' + A ? ' (south)' : '';
+    return (spec[0] === '+' ? '+' : '\u2212') + 'x' + spec.slice(1) + north;
+  }
+  function setPole(spec) {
+    if (poleSpecs().indexOf(spec) < 0) return false;
+    const k = Number(spec.slice(1)) - 1;
+    const x = new Float64Array(A);
+    x[k] = (spec[0] === '-' ? -1 : 1) * meta.space.radius;
+    iso = spec === '+' + A ? view.identity() : view.centreOn(x);
+    pole = spec === '+' + A ? '' : spec;
+    // The globe: the camera faces the north pole, where the chosen pole now is.
+    if (projName === 'sphere' && camera && pole) camera = Float64Array.of(1, 0, 0, 0, 1, 0, 0, 0, 1);
+    const ps = $('pole');
+    if (ps) ps.value = spec;
+    return true;
   }
 
   // ---------------------------------------------------------------- rendering back ends
@@ -875,6 +904,8 @@
     const x = new Float64Array(A);
     for (let i = 0; i < A; i++) x[i] = fr.x[A * b + i];
     iso = view.centreOn(x);
+    pole = '';
+    if ($('pole')) $('pole').value = '';
     // The globe: turn the camera to face the north pole, where the body now is (drawn at the middle).
     if (projName === 'sphere' && camera) camera = Float64Array.of(1, 0, 0, 0, 1, 0, 0, 0, 1);
     drawSafe();
@@ -911,6 +942,22 @@
     const sz = $('size');
     sz.value = String(sizeFactor);
     sz.addEventListener('input', () => { sizeFactor = num(sz.value, 1); drawSafe(); });
+    const ps = $('pole');
+    const specs = poleSpecs();
+    $('pole-label').hidden = specs.length === 0;
+    const picked = document.createElement('option');
+    picked.value = '';
+    picked.textContent = 'a body (double-click)';
+    picked.disabled = true;
+    ps.appendChild(picked);
+    for (const spec of specs) {
+      const o = document.createElement('option');
+      o.value = spec;
+      o.textContent = poleLabel(spec);
+      ps.appendChild(o);
+    }
+    ps.value = pole || '+' + A;
+    ps.addEventListener('change', () => { setPole(ps.value); drawSafe(); });
     const tl = $('tiles');
     $('tiles-label').hidden = !meta.polygon;
     tl.checked = tilesOn;
@@ -922,7 +969,12 @@
     $('play').addEventListener('click', () => play(!playing));
     $('prev').addEventListener('click', () => seek(current - 1));
     $('next').addEventListener('click', () => seek(current + 1));
-    $('recentre').addEventListener('click', () => { iso = view.identity(); drawSafe(); });
+    $('recentre').addEventListener('click', () => {
+      iso = view.identity();
+      pole = '';
+      if (specs.length) ps.value = '+' + A;
+      drawSafe();
+    });
     // Buttons give the focus back, so that the space bar (play/pause) does not also press them.
     for (const id of ['play', 'prev', 'next', 'recentre']) $(id).addEventListener('click', (ev) => ev.currentTarget.blur());
 
@@ -1020,6 +1072,14 @@
     wire();
     buildDiagnostics();
     layout();
+    if (params.pole !== undefined) {
+      const given = params.pole.trim();  // an unescaped '+' in a query reads as a space
+      const spec = /^\d/.test(given) ? '+' + given : given;
+      if (!setPole(spec)) {
+        banner('pole=' + params.pole + ' is not an axis pole of ' + state.space + ' (' +
+               (poleSpecs().join(', ') || 'only S^n has poles to choose') + ').', true);
+      }
+    }
     if (params.centre !== undefined) {
       const b = Math.round(num(params.centre, -1));
       if (!(b >= 0 && b < N)) banner('centre=' + params.centre + ' is not a body (0 to ' + (N - 1) + ').', true);
