@@ -13,6 +13,9 @@ of it with URL parameters choosing the projection, frame, colours and trails (do
   view-h2-halfplane.png       free bodies on H^2 (geodesics), upper half-plane, trails
   view-h3-ball.png            free bodies on H^3 (geodesics), Poincare ball, trails
   view-e2-box.png             the liquid in a periodic box (bulk-lj-flat.toml), coloured by kinetic energy
+  view-h2-hyperboloid.png     the free bodies on H^2 of view-h2-halfplane.png on the hyperboloid, trails
+  view-e3-box.png             a Lennard-Jones liquid in a periodic box of E^3 (216 bodies), coloured by speed
+  view-s5-stereographic.png   free bodies on S^5, stereographic into R^5, its first 3 coordinates (said so)
 Scenes other than the examples are written here with fixed random numbers (seed 28).
 """
 import argparse
@@ -57,6 +60,26 @@ def free_scene(name, kind, dim, count, seed, reach, speed, t_end, radius=1.0):
     return "\n".join(lines) + "\n"
 
 
+def box_scene(name, side, density, seed, t_end):
+    """side^3 Lennard-Jones bodies on a simple cubic lattice in a periodic box of E^3 at the given
+    number density, with random velocities of zero total momentum (kT about 1)."""
+    rng = random.Random(seed)
+    edge = (side ** 3 / density) ** (1.0 / 3.0)
+    spacing = edge / side
+    points = [[(i + 0.5) * spacing, (j + 0.5) * spacing, (k + 0.5) * spacing]
+              for i in range(side) for j in range(side) for k in range(side)]
+    velocities = [[rng.gauss(0, 1) for _ in range(3)] for _ in points]
+    mean = [sum(v[c] for v in velocities) / len(velocities) for c in range(3)]
+    velocities = [[v[c] - mean[c] for c in range(3)] for v in velocities]
+    lines = [f'name = "{name}"', "[space]", 'kind = "euclidean"', "dim = 3", f"box = [{edge!r}, {edge!r}, {edge!r}]"]
+    for x, v in zip(points, velocities):
+        lines += ["[[bodies]]", "mass = 1.0", f"x = [{', '.join(repr(c) for c in x)}]",
+                  f"v = [{', '.join(repr(c) for c in v)}]"]
+    lines += ["[[potential]]", 'kind = "lennard-jones"', "epsilon = 1.0", "sigma = 1.0", "cutoff = 2.5",
+              "[integrator]", 'method = "sesi2"', "dt = 0.005", f"t_end = {t_end!r}", "output_every = 10"]
+    return "\n".join(lines) + "\n"
+
+
 def chromium(program, isolate, what, url):
     """Headless Chromium on url (in an empty network namespace where `unshare -n` works); its stdout."""
     profile = tempfile.mkdtemp(prefix="chromium-")
@@ -88,6 +111,8 @@ def main():
         "s3-free": free_scene("s3-free", "sphere", 3, 120, 28, 0, 0.6, 4.0),
         "h2-free": free_scene("h2-free", "hyperbolic", 2, 60, 28, 2.5, 0.8, 3.0),
         "h3-free": free_scene("h3-free", "hyperbolic", 3, 150, 28, 3.0, 0.8, 3.0),
+        "s5-free": free_scene("s5-free", "sphere", 5, 120, 28, 0, 0.6, 4.0),
+        "e3-box": box_scene("e3-box", 6, 0.6, 28, 2.0),
     }
     # figure: (scene file or written scene, URL query)
     figures = {
@@ -98,6 +123,9 @@ def main():
         "h2-halfplane": ("h2-free", "frame=-1&projection=halfplane&trail=60"),
         "h3-ball": ("h3-free", "frame=-1&trail=60"),
         "e2-box": ("bulk-lj-flat", "frame=20&colour=energy"),
+        "h2-hyperboloid": ("h2-free", "frame=30&projection=hyperboloid&trail=30"),
+        "e3-box": ("e3-box", "frame=-1&colour=speed"),
+        "s5-stereographic": ("s5-free", "frame=-1&trail=40"),
     }
     only = set(filter(None, a.only.split(",")))
     isolate = subprocess.run(["unshare", "-n", "true"], capture_output=True).returncode == 0

@@ -513,17 +513,23 @@ var SesiGeometry = (function () {
     }
 
     /// Unbounded views (flat without a box, hyperboloid): fit the extent to the points' images
-    /// (the largest |coordinate| times 1.05); other views keep theirs. Returns extent().
+    /// (flat: the largest |coordinate| times 1.05; hyperboloid, whose height grows as e^(d/R):
+    /// the 95th percentile, so that a few far bodies do not shrink the rest to a dot); other
+    /// views keep theirs. Returns extent().
     function fit(X, count, iso) {
       if (!(name === "hyperboloid" || (name === "flat" && !box))) return extentValue();
       const p = [0, 0, 0];
-      let m = 0;
+      const sizes = [];
       for (let b = 0; b < count; ++b) {
         for (let i = 0; i < a; ++i) tmp[i] = X[b * a + i];
         apply(iso || identity(), tmp, tmp2);
         if (!mapPoint(tmp2, p)) continue;
-        m = Math.max(m, Math.abs(p[0] - centre[0]), Math.abs(p[1] - centre[1]), Math.abs(p[2]));
+        sizes.push(Math.max(Math.abs(p[0] - centre[0]), Math.abs(p[1] - centre[1]), Math.abs(p[2])));
       }
+      sizes.sort((u, v) => u - v);
+      const m = sizes.length === 0 ? 0
+        : name === "hyperboloid" ? sizes[Math.min(sizes.length - 1, Math.floor(0.95 * sizes.length))]
+        : sizes[sizes.length - 1];
       fitted = m > 0 ? 1.05 * m : 0;
       return extentValue();
     }
@@ -564,9 +570,10 @@ var SesiGeometry = (function () {
           return lines;
         }
         case "hyperboloid": {
-          // the hyperbolas through the top (x_1, x_2 axes), and the circle at distance 2R
+          // the hyperbolas through the top (x_1, x_2 axes), and the circles at distances T/2 and T,
+          // T the distance where the surface leaves the view (sinh T = the extent)
           const lines = [];
-          const T = 2;
+          const T = Math.max(1, Math.asinh(extentValue()));
           for (let ax = 0; ax < n; ++ax) {
             const pts = [];
             for (let s = 0; s <= segs; ++s) {
@@ -579,9 +586,11 @@ var SesiGeometry = (function () {
             lines.push(pts);
           }
           if (n === 2) {
-            const c = circle3(Math.sinh(T), [0, 1], segs);
-            for (let i = 2; i < c.length; i += 3) c[i] = Math.cosh(T) - 1;
-            lines.push(c);
+            for (const d of [T / 2, T]) {
+              const c = circle3(Math.sinh(d), [0, 1], segs);
+              for (let i = 2; i < c.length; i += 3) c[i] = Math.cosh(d) - 1;
+              lines.push(c);
+            }
           }
           return lines;
         }
