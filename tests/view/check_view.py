@@ -748,6 +748,16 @@ def s4_first_coordinates(ctx):
     expect_drawn(st, 0, t, query)
     check("first 3" in st["note"], f"?{query}: the note {st['note']!r} does not say which coordinates are shown")
     expect_positions(st, spatial(lambda x: poincare(x, R)[:3], xs, st["camera"]), query, "S^4 first 3")
+    # Chosen coordinates (axes=4,1,3, 1-based): u_4, u_1, u_3 in that order, and the note says so.
+    query = "frame=0&axes=4,1,3"
+    st = ctx.state(page, query)
+    expect_drawn(st, 0, t, query)
+    check(st["note"] == "coordinates 4, 1, 3 of 4", f"?{query}: the note {st['note']!r}")
+    expect_positions(st, spatial(lambda x: [poincare(x, R)[k] for k in (3, 0, 2)], xs, st["camera"]), query,
+                     "S^4 axes 4, 1, 3")
+    query = "frame=0&axes=1,1,2"
+    st = ctx.state(page, query)
+    check(any("axes=1,1,2" in m for m in st["messages"]), f"?{query}: no banner for bad axes: {st['messages']}")
 
 
 @case

@@ -310,7 +310,8 @@ var SesiGeometry = (function () {
 
   // ---- the view -------------------------------------------------------------------------------
 
-  function makeView(space, name) {
+  /// axes (optional, n > 3): the 0-based coordinates shown, 3 distinct of 0..n-1 (default 0, 1, 2).
+  function makeView(space, name, axes) {
     if (!space || (space.kind !== "sphere" && space.kind !== "hyperbolic" && space.kind !== "euclidean"))
       throw new Error("SesiGeometry.makeView: unknown space kind " + JSON.stringify(space && space.kind));
     const n = space.dim | 0;
@@ -325,6 +326,14 @@ var SesiGeometry = (function () {
       throw new Error("SesiGeometry.makeView: projection '" + name + "' is not one of " + names.join(", ") +
                       " for " + spaceLabel(space));
     const shown = Math.min(n, 3);
+    // Which coordinates of x_(1..n) (or of u) are shown when n > 3: three distinct axes.
+    let ax = [0, 1, 2];
+    if (n > 3 && axes !== undefined && axes !== null) {
+      const ok = Array.isArray(axes) && axes.length === 3 && axes.every((k) => Number.isInteger(k) && k >= 0 && k < n) &&
+        new Set(axes).size === 3;
+      if (!ok) throw new Error("SesiGeometry.makeView: axes must be 3 distinct coordinates of 1.." + n);
+      ax = axes.slice();
+    }
     let dims;
     if (name === "sphere" || name === "ball") dims = 3;
     else if (name === "stereographic") dims = n === 2 ? 2 : 3;
@@ -332,7 +341,10 @@ var SesiGeometry = (function () {
     else if (name === "flat") dims = n <= 2 ? 2 : 3;
     else dims = 2;
     let note = "";
-    if (n > 3) note = "first 3 of " + n + " coordinates";
+    if (n > 3) {
+      note = ax[0] === 0 && ax[1] === 1 && ax[2] === 2 ? "first 3 of " + n + " coordinates"
+        : "coordinates " + ax.map((k) => k + 1).join(", ") + " of " + n;
+    }
     let fitted = 0;  // extent fitted to data (unbounded views), 0 until fit()
 
     const tmp = new Float64Array(a), tmp2 = new Float64Array(a), scratch = new Float64Array(a);
@@ -428,7 +440,7 @@ var SesiGeometry = (function () {
         const r = Math.hypot(xs, y[n]);
         const den = stereoDenominator(xs * xs, y[n], r);
         if (!(den > 0)) return false;
-        for (let i = 0; i < shown; ++i) p[i] = y[i] / den;
+        for (let i = 0; i < shown; ++i) p[i] = y[ax[i]] / den;
         if (!finite3(p)) return false;
         // |u| over all n coordinates against 1.5 extent (2.2): the far side near the south pole
         return xs / den <= 1.5 * extentValue();
@@ -437,7 +449,7 @@ var SesiGeometry = (function () {
         const den = R + y[n];
         if (!(den > 0)) return false;
         if (name === "disc" || name === "ball") {
-          for (let i = 0; i < shown; ++i) p[i] = y[i] / den;
+          for (let i = 0; i < shown; ++i) p[i] = y[ax[i]] / den;
           return finite3(p);
         }
         if (name === "hyperboloid") {
@@ -460,7 +472,7 @@ var SesiGeometry = (function () {
         const ext = 4 * extentValue();
         return Math.abs(p[0]) <= ext && p[1] <= 1 + ext;
       }
-      for (let i = 0; i < shown; ++i) p[i] = y[i] - (box ? box[i] / 2 : 0);
+      for (let i = 0; i < shown; ++i) p[i] = y[ax[i]] - (box ? box[ax[i]] / 2 : 0);
       return finite3(p);
     }
 
@@ -504,7 +516,7 @@ var SesiGeometry = (function () {
         default: {
           if (box) {
             let m = 0;
-            for (let i = 0; i < shown; ++i) m = Math.max(m, box[i] / 2);
+            for (let i = 0; i < shown; ++i) m = Math.max(m, box[ax[i]] / 2);
             return m;
           }
           return fitted > 0 ? fitted : 1;
@@ -596,7 +608,7 @@ var SesiGeometry = (function () {
         }
         default: {  // flat: the box's edges
           if (!box) return [];
-          const h = [0, 1, 2].map((i) => (i < shown ? box[i] / 2 : 0));
+          const h = [0, 1, 2].map((i) => (i < shown ? box[ax[i]] / 2 : 0));
           if (dims === 2) {
             if (shown === 1) return [[-h[0], 0, 0, h[0], 0, 0]];
             return [[-h[0], -h[1], 0, h[0], -h[1], 0, h[0], h[1], 0, -h[0], h[1], 0, -h[0], -h[1], 0]];
@@ -713,7 +725,7 @@ var SesiGeometry = (function () {
 
     return {
       name: name, dims: dims, label: (name === "disc" && n === 1) ? "Poincare interval" : LABELS[name],
-      note: note, ambient: a, centre: centre,
+      note: note, ambient: a, centre: centre, axes: ax.slice(0, shown),
       identity: identity, centreOn: centreOn, compose: compose, apply: apply, drag: drag,
       project: project, projectPoint: projectPoint, localScale: localScale, extent: extentValue,
       fit: fit, outlines: outlines, geodesic: geodesic, polygonLines: polygonLines,

@@ -270,7 +270,7 @@
     const names = G.projections(meta.space);
     if (names.indexOf(name) < 0) name = names[0];
     projName = name;
-    view = G.makeView(meta.space, name);
+    view = G.makeView(meta.space, name, axes);
     iso = view.identity();
     viewFitted = false;
     camera = view.dims === 3 ? defaultCamera() : null;
@@ -282,6 +282,29 @@
     if (sel) sel.value = name;
     $('recentre').hidden = view.dims !== 2 || meta.space.kind === 'euclidean' && !meta.space.box;
     if (pole) setPole(pole);  // a new projection keeps the chosen pole
+  }
+
+  // n > 3: the three coordinates shown (0-based; null: the first three), from axes=i,j,k (1-based)
+  // or the "axes" field.
+  let axes = null;
+  function parseAxes(text) {
+    const n = meta.space.dim;
+    const parts = String(text).split(/[ ,]+/).filter((w) => w !== '').map(Number);
+    if (parts.length !== 3 || !parts.every((k) => Number.isInteger(k) && k >= 1 && k <= n) || new Set(parts).size !== 3) {
+      return null;
+    }
+    return parts.map((k) => k - 1);
+  }
+  function setAxes(text) {
+    const parsed = parseAxes(text);
+    if (!parsed) return false;
+    axes = parsed;
+    const keep = iso;
+    setView(projName);
+    iso = keep;  // the same isometry (pole, centre), other coordinates shown
+    const field = $('axes');
+    if (field) field.value = axes.map((k) => k + 1).join(',');
+    return true;
   }
 
   // The pole of S^n's views (the point drawn at the centre; stereographic projection is from its
@@ -958,6 +981,17 @@
     }
     ps.value = pole || '+' + A;
     ps.addEventListener('change', () => { setPole(ps.value); drawSafe(); });
+    const axesField = $('axes');
+    $('axes-label').hidden = !(meta.space.dim > 3);
+    axesField.value = (axes || [0, 1, 2]).map((k) => k + 1).join(',');
+    axesField.addEventListener('change', () => {
+      if (!setAxes(axesField.value)) {
+        banner('axes: three different coordinates of 1..' + meta.space.dim + ', e.g. 1,2,3 (got "' + axesField.value +
+               '").', true);
+        axesField.value = (axes || [0, 1, 2]).map((k) => k + 1).join(',');
+      }
+      drawSafe();
+    });
     const tl = $('tiles');
     $('tiles-label').hidden = !meta.polygon;
     tl.checked = tilesOn;
@@ -1057,6 +1091,12 @@
     if (params.projection !== undefined && names.indexOf(params.projection) < 0) {
       banner('Unknown projection "' + params.projection + '" for ' + state.space + ': showing ' + names[0] +
              ' (choices: ' + names.join(', ') + ').', true);
+    }
+    if (params.axes !== undefined) {
+      if (!(meta.space.dim > 3)) banner('axes=' + params.axes + ': only a space of dimension above 3 has coordinates to choose.', true);
+      else if (!(axes = parseAxes(params.axes))) {
+        banner('axes=' + params.axes + ' is not three different coordinates of 1..' + meta.space.dim + ': showing 1,2,3.', true);
+      }
     }
     setView(params.projection);
     current = F > 0 ? Math.max(0, Math.min(F - 1, Math.round(num(params.frame, 0)))) : 0;
