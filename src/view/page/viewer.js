@@ -876,6 +876,26 @@
     }
   }
 
+  // tools/view_bench.py (bench=K): the time of a redraw of the frame shown (projection, buffers,
+  // drawing; gl.finish() waits for the GPU), and of a step to each of the next K frames (decoding
+  // too), averaged over K; into state.bench. Then back to the frame asked for.
+  function benchmark(k) {
+    if (!(k > 0) || F === 0) return;
+    const finish = () => { if (gl) gl.finish(); };
+    const start = current;
+    let t0 = performance.now();
+    for (let i = 0; i < k; i++) { draw(); finish(); }
+    const redraw = (performance.now() - t0) / k;
+    const steps = Math.min(k, F - 1);
+    t0 = performance.now();
+    for (let i = 1; i <= steps; i++) { current = (start + i) % F; draw(); finish(); }
+    const step = steps > 0 ? (performance.now() - t0) / steps : null;
+    current = start;
+    draw();
+    state.bench = { bodies: N, redraws: k, redraw_ms: redraw, steps: steps, step_ms: step };
+    writeState();
+  }
+
   // ---------------------------------------------------------------- interaction
   function seek(k) {
     if (F === 0) return;
@@ -1132,6 +1152,7 @@
       }
     }
     draw();  // synchronously: --dump-dom and --screenshot see the first frame
+    if (params.bench !== undefined) benchmark(Math.round(num(params.bench, 0)));
     // Headless browsers may size the window after the first layout without a resize event: follow it.
     const seen = [window.innerWidth, window.innerHeight];
     requestAnimationFrame(() => {
