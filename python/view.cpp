@@ -179,31 +179,15 @@ void sesi_bind_view(py::module_& m) {
 
           // Diagnostics over every row (not only the frames kept), as a run directory's: the energy
           // error relative to the first row's energy (absolute when that is 0), and the kinetic
-          // temperature sum_b m_b |v_b|^2 / (N n) (2K over the N n degrees of freedom, k_B = 1:
-          // equipartition, Frenkel and Smit, Understanding Molecular Simulation, 4.1; |v|^2 the
-          // Minkowski norm on H^n, Ratcliffe, Foundations of Hyperbolic Manifolds, 3.2).
-          std::vector<double> error(energy.size()), temperature(energy.size());
+          // temperature (vw::kinetic_temperature); at most vw::max_series_points each.
+          std::vector<double> error(energy.size());
           const double e0 = energy.front();
           for (std::size_t k = 0; k < energy.size(); ++k) {
             error[k] = e0 != 0.0 ? (energy[k] - e0) / std::abs(e0) : energy[k] - e0;
           }
-          const bool hyperbolic = space.kind == sesi::program::SpaceKind::hyperbolic;
-          for (std::size_t k = 0; k < frames.v.size(); ++k) {
-            double twice_kinetic = 0.0;
-            for (py::ssize_t b = 0; b < bodies; ++b) {
-              double v2 = frames.v[k].col(b).squaredNorm();
-              if (hyperbolic) {
-                const double v0 = frames.v[k](ambient - 1, b);
-                v2 = std::max(0.0, v2 - 2 * v0 * v0);
-              }
-              twice_kinetic += masses(b) * v2;
-            }
-            temperature[k] = bodies > 0 ? twice_kinetic / (static_cast<double>(bodies) * static_cast<double>(dim)) : 0.0;
-          }
           data.diagnostics.clear();
-          // At most vw::max_series_points each, each bucket's largest |y| kept (as a run directory's).
           data.diagnostics.push_back(vw::thin_series({e0 != 0.0 ? "relative energy error" : "energy error", t, error}));
-          data.diagnostics.push_back(vw::thin_series({"kinetic temperature", t, temperature}));
+          data.diagnostics.push_back(vw::thin_series(vw::kinetic_temperature(frames)));
           return page(data, precision);
         },
         py::arg("sim"), py::arg("t"), py::arg("x"), py::arg("v"), py::arg("energy"), py::arg("image_counts"),

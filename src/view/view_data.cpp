@@ -133,24 +133,8 @@ ViewData read_view_data(const fs::path& dir, const ReadViewOptions& options) {
       s.y.push_back((*kinetic)[k]);
     }
     if (!s.t.empty()) data.diagnostics.push_back(thin_series(std::move(s)));
-  } else if (!frames.v.empty() && !frames.masses.empty()) {
-    // The kinetic temperature of each frame read, sum_b m_b |v_b|^2 / (N n) with k_B = 1 (2K over
-    // the N n degrees of freedom: equipartition, e.g. Frenkel and Smit, Understanding Molecular
-    // Simulation, 4.1); |v| as in the speeds (Minkowski norm on H^n).
-    const bool hyperbolic = frames.space.kind == program::SpaceKind::hyperbolic;
-    Series s{"kinetic temperature", {}, {}};
-    for (std::size_t k = 0; k < frames.x.size(); ++k) {
-      const Eigen::MatrixXd& v = frames.v[k];
-      double sum = 0.0;
-      for (Eigen::Index b = 0; b < v.cols(); ++b) {
-        double s2 = v.col(b).squaredNorm();
-        if (hyperbolic) s2 -= 2.0 * v(v.rows() - 1, b) * v(v.rows() - 1, b);
-        sum += frames.masses[static_cast<std::size_t>(b)] * std::max(s2, 0.0);
-      }
-      s.t.push_back(frames.t[k]);
-      s.y.push_back(sum / (static_cast<double>(v.cols()) * frames.space.dim));
-    }
-    data.diagnostics.push_back(thin_series(std::move(s)));
+  } else if (Series s = kinetic_temperature(frames); !s.t.empty()) {
+    data.diagnostics.push_back(thin_series(std::move(s)));  // from the frames read (NVE runs)
   }
   return data;
 }

@@ -339,6 +339,27 @@ Series thin_series(Series series, std::size_t max_points) {
   return out;
 }
 
+double speed_squared(const program::SpaceSpec& space, const Eigen::Ref<const Eigen::VectorXd>& v) {
+  double s2 = v.squaredNorm();
+  if (space.kind == SpaceKind::hyperbolic) s2 -= 2.0 * v(v.size() - 1) * v(v.size() - 1);
+  return std::max(s2, 0.0);
+}
+
+Series kinetic_temperature(const analysis::Frames& frames) {
+  Series s{"kinetic temperature", {}, {}};
+  if (frames.v.empty() || frames.masses.empty()) return s;
+  for (std::size_t k = 0; k < frames.v.size(); ++k) {
+    const Eigen::MatrixXd& v = frames.v[k];
+    double twice_kinetic = 0.0;
+    for (Eigen::Index b = 0; b < v.cols(); ++b) {
+      twice_kinetic += frames.masses[static_cast<std::size_t>(b)] * speed_squared(frames.space, v.col(b));
+    }
+    s.t.push_back(frames.t[k]);
+    s.y.push_back(v.cols() > 0 ? twice_kinetic / (static_cast<double>(v.cols()) * frames.space.dim) : 0.0);
+  }
+  return s;
+}
+
 ViewData from_frames(const analysis::Frames& frames, std::string title, long max_frames) {
   const auto fail = [](const std::string& what) { throw InputError(Origin{}, "", "frames: " + what); };
   const std::size_t count = frames.x.size();
@@ -377,7 +398,6 @@ ViewData from_frames(const analysis::Frames& frames, std::string title, long max
   data.title = std::move(title);
   data.masses = frames.masses;
   data.thinned_from = keep.size() < count ? static_cast<long>(count) : 0;
-  const bool hyperbolic = frames.space.kind == SpaceKind::hyperbolic;
   const bool jumps = !frames.images.empty() || !frames.words.empty();
   for (std::size_t i = 0; i < keep.size(); ++i) {
     const std::size_t k = keep[i];
@@ -386,14 +406,7 @@ ViewData from_frames(const analysis::Frames& frames, std::string title, long max
     if (velocities) {
       const Eigen::MatrixXd& v = frames.v[k];
       Eigen::VectorXf s(n);
-      for (Eigen::Index b = 0; b < n; ++b) {
-        // |v| in the metric: Euclidean on S^n (embedded isometrically in R^{n+1}) and E^n; on H^n
-        // the Minkowski norm <v,v>_L = v_1^2 + ... + v_n^2 - v_{n+1}^2 >= 0 of a tangent vector
-        // (Ratcliffe, Foundations of Hyperbolic Manifolds, 3.2), clamped at 0 against rounding.
-        double s2 = v.col(b).squaredNorm();
-        if (hyperbolic) s2 -= 2.0 * v(a - 1, b) * v(a - 1, b);
-        s(b) = static_cast<float>(std::sqrt(std::max(s2, 0.0)));
-      }
+      for (Eigen::Index b = 0; b < n; ++b) s(b) = static_cast<float>(std::sqrt(speed_squared(frames.space, v.col(b))));
       data.speed.push_back(std::move(s));
     }
     if (jumps) {

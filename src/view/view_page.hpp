@@ -71,6 +71,16 @@ std::size_t frame_bytes(const ViewData& data, Precision resolved);
 /// them), else f32. The other requests are returned as they are.
 Precision resolve_precision(const ViewData& data, Precision requested);
 
+/// |v|^2 of a tangent vector v in the space's metric: Euclidean on S^n (embedded isometrically in
+/// R^{n+1}) and E^n; on H^n the Minkowski form v_1^2 + ... + v_n^2 - v_{n+1}^2 >= 0 (Ratcliffe,
+/// Foundations of Hyperbolic Manifolds, 3.2), clamped at 0 against rounding.
+double speed_squared(const program::SpaceSpec& space, const Eigen::Ref<const Eigen::VectorXd>& v);
+
+/// The kinetic temperature of each frame, sum_b m_b |v_b|^2 / (N n) with k_B = 1 (2K over the
+/// N n degrees of freedom: equipartition, Frenkel and Smit, Understanding Molecular Simulation,
+/// 4.1). Needs frames.v and frames.masses; an empty series without them.
+Series kinetic_temperature(const analysis::Frames& frames);
+
 /// RFC 4648 base64 with '=' padding.
 std::string base64(const void* bytes, std::size_t size);
 
