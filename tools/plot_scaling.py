@@ -6,8 +6,9 @@
 Each DIR holds a scaling.csv. Plots seconds per step against N on log-log axes, one line per
 (space, dimension, potential, method, threads), with dashed O(N) and O(N^2) guides through the
 first point, and prints per series the log-log slopes and, at every N, the ratios to the
-references of the same run (sesi on flat E^3, the plain flat cell-list loop, and for an H^n
-cluster away from the chart origin the same cluster at the origin).
+references of the same run (sesi on flat E^3, the plain flat cell-list loop, LAMMPS on the E^n box
+at the same N and density with as many ranks as threads (issue #27; S^n rows and --box rows), and
+for an H^n cluster away from the chart origin the same cluster at the origin).
 """
 import argparse
 import csv
@@ -38,9 +39,12 @@ def read(directory):
 def label(r):
     if r["space"] == "flat-periodic":
         return "flat cell-list loop (3-D, 1 thread)" + r.get("tag", "")
+    if r["space"] == "lammps":
+        return f"LAMMPS E^{r['dim']} box ({r['threads']} ranks)" + r.get("tag", "")
     symbol = {"sphere": "S", "hyperbolic": "H", "euclidean": "E"}[r["space"]]
     far = f" centre {r['center_distance']:g} R away" if r["center_distance"] else ""
-    return f"{symbol}^{r['dim']} {r['potential']} {r['method']} {r['threads']} thr{far}" + r.get("tag", "")
+    topology = f" {r['topology']}" if r.get("topology") else ""
+    return f"{symbol}^{r['dim']}{topology} {r['potential']} {r['method']} {r['threads']} thr{far}" + r.get("tag", "")
 
 
 def series_of(rows):
@@ -95,8 +99,8 @@ def main():
 
     print()
     if args.markdown:
-        print("| N | series | s/step | ns/pair | peak MB | / sesi E^3 | / flat cell list | far / origin |")
-        print("|---|---|---|---|---|---|---|---|")
+        print("| N | series | s/step | ns/pair | peak MB | / sesi E^3 | / flat cell list | / LAMMPS | far / origin |")
+        print("|---|---|---|---|---|---|---|---|---|")
     for r in sorted(rows, key=lambda r: (r["source"], r["n_bodies"], label(r))):
         same = [q for q in rows if q["source"] == r["source"] and q["n_bodies"] == r["n_bodies"]]
         flat = [q for q in same if q["space"] == "flat-periodic"]
@@ -104,12 +108,15 @@ def main():
               and q["threads"] == r["threads"] and q is not r]
         ratio_e3 = f"{r['seconds_per_step'] / e3[0]['seconds_per_step']:.2f}" if e3 and r["space"] != "euclidean" else ""
         ratio_flat = (f"{r['seconds_per_step'] / flat[0]['seconds_per_step']:.2f}"
-                      if flat and r["space"] != "flat-periodic" else "")
+                      if flat and r["space"] not in ("flat-periodic", "lammps") else "")
+        lammps = [q for q in same if q["space"] == "lammps" and q["dim"] == r["dim"] and q["threads"] == r["threads"]
+                  and (r["space"] == "sphere" or r.get("topology") == "box") and r["space"] != "lammps"]
+        ratio_lammps = f"{r['seconds_per_step'] / lammps[0]['seconds_per_step']:.2f}" if lammps else ""
         origin = [q for q in same if r["center_distance"] and q["space"] == r["space"] and q["dim"] == r["dim"]
                   and q["method"] == r["method"] and q["threads"] == r["threads"] and not q["center_distance"]]
         ratio_origin = f"{r['seconds_per_step'] / origin[0]['seconds_per_step']:.2f}" if origin else ""
         cells = [str(r["n_bodies"]), label(r), f"{r['seconds_per_step']:.4g}", f"{r['ns_per_pair']:.3g}",
-                 f"{r['peak_rss_mb']:.0f}", ratio_e3, ratio_flat, ratio_origin]
+                 f"{r['peak_rss_mb']:.0f}" if r["space"] != "lammps" else "", ratio_e3, ratio_flat, ratio_lammps, ratio_origin]
         print(("| " + " | ".join(cells) + " |") if args.markdown else "  " + "  ".join(cells))
 
 

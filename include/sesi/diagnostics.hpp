@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 
 #include "sesi/chart.hpp"
+#include "sesi/parallel.hpp"
 #include "sesi/state.hpp"
 
 namespace sesi {
@@ -47,13 +48,16 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_po
   using Chart = typename Sys::Chart;
   Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> X(sys.ambient_dim(),
                                                                          sys.bodies());
-  typename Chart::Point q(sys.dim());
-  typename Chart::Ambient x(sys.ambient_dim());
-  for (int b = 0; b < sys.bodies(); ++b) {
-    q = s.q.col(b);
-    sys.chart().embed(q, x);
-    X.col(b) = s.framed() ? (s.frames[static_cast<std::size_t>(b)] * x).eval() : x;
-  }
+  // Body by body on threads (each writes its own column; the same bits for any count).
+  parallel::for_chunks(sys.bodies(), parallel::chunks_for(sys.bodies()), [&](int begin, int end, int) {
+    typename Chart::Point q(sys.dim());
+    typename Chart::Ambient x(sys.ambient_dim());
+    for (int b = begin; b < end; ++b) {
+      q = s.q.col(b);
+      sys.chart().embed(q, x);
+      X.col(b) = s.framed() ? (s.frames[static_cast<std::size_t>(b)] * x).eval() : x;
+    }
+  });
   if (s.clustered) X = (s.cluster * X).eval();
   return X;
 }
@@ -65,14 +69,16 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_ve
   using Chart = typename Sys::Chart;
   Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> V(sys.ambient_dim(),
                                                                          sys.bodies());
-  typename Chart::Point q(sys.dim()), p(sys.dim());
-  typename Chart::Ambient v(sys.ambient_dim());
-  for (int b = 0; b < sys.bodies(); ++b) {
-    q = s.q.col(b);
-    p = s.p.col(b);
-    sys.chart().velocity(q, p, sys.mass(b), v);
-    V.col(b) = s.framed() ? (s.frames[static_cast<std::size_t>(b)] * v).eval() : v;
-  }
+  parallel::for_chunks(sys.bodies(), parallel::chunks_for(sys.bodies()), [&](int begin, int end, int) {
+    typename Chart::Point q(sys.dim()), p(sys.dim());
+    typename Chart::Ambient v(sys.ambient_dim());
+    for (int b = begin; b < end; ++b) {
+      q = s.q.col(b);
+      p = s.p.col(b);
+      sys.chart().velocity(q, p, sys.mass(b), v);
+      V.col(b) = s.framed() ? (s.frames[static_cast<std::size_t>(b)] * v).eval() : v;
+    }
+  });
   if (s.clustered) V = (s.cluster * V).eval();
   return V;
 }

@@ -15,6 +15,15 @@
 ///    from the chart's origin. The half-space's boundary point is put opposite the bodies'
 ///    centroid, so that the coordinates of the bodies are computed without cancellation.
 ///
+/// A build sorts the bodies by cell (a radix sort of the cells' numbers in the keys' bounding box),
+/// copies the points in that order, coordinate by coordinate, and finds rows cell by cell: a
+/// body's candidates are then a few contiguous runs of that copy (one per row of cells of its
+/// query box, shared by the bodies of a cell off H^n), whose chords are formed in short loops of
+/// fixed length that the compiler vectorises (Allen & Tildesley, 2nd ed., sec. 5.3.2, and LAMMPS'
+/// binned lists, which sort atoms by bin likewise). The order is exposed (visit_order) for loops
+/// that want to visit rows in it. Buffers keep their capacity between builds, so a rebuild of a
+/// list whose size changes little allocates nothing.
+///
 /// Lists are full (i sees j and j sees i) and sorted by body index, so a row's sum over its
 /// neighbours does not depend on how the index was built or when it was last rebuilt: forces
 /// from the index equal those of the all-pairs loop with the same kernel to the bit.
@@ -44,6 +53,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -51,6 +61,7 @@
 
 #include "sesi/config.hpp"
 #include "sesi/parallel.hpp"
+#include "sesi/profile.hpp"
 
 namespace sesi {
 
@@ -97,6 +108,9 @@ struct NeighbourLists {
   std::vector<int> offset;
   std::vector<int> index;
   std::vector<int> image;
+  /// The bodies sorted by the cell of the index that holds them (a permutation of 0 .. bodies()-1,
+  /// ties by index): a loop over rows in this order visits neighbours in nearby memory.
+  std::vector<int> visit_order;
 
   int bodies() const { return offset.empty() ? 0 : static_cast<int>(offset.size()) - 1; }
   int begin(int i) const { return offset[static_cast<std::size_t>(i)]; }
@@ -162,44 +176,192 @@ class NeighbourIndex {
 
   /// The lists of the first `rows` columns of X against all its columns (build; the ghosts'
   /// rows are not needed).
+  ///
+  /// Rows are found in cell order (order_, the bodies sorted by cell), against a copy of the
+  /// points in that order (packed_), so that a body's candidates are a few contiguous runs of
+  /// memory (one per row of cells in its query box), shared by all the bodies of its cell off
+  /// H^n (where the query box is the cell's). The chord is computed from the same numbers in the
+  /// same order as chord2_of, so the lists are those of a body-by-body scan, bit for bit.
   template <class Matrix>
   void build_rows(const Chart& chart, const Matrix& X, int rows, Scalar reach, NeighbourLists& out) {
-    const int n = rows;
+    const int total = static_cast<int>(X.cols());
+    const int a = static_cast<int>(X.rows());
     const Scalar chord = chart.chord_of_distance(reach);
     const Scalar chord2 = chord * chord;
     bin(chart, X, reach, chord);
-    const int chunks = parallel::chunks_for(n);
-    buffers_.resize(static_cast<std::size_t>(chunks));
-    out.offset.assign(static_cast<std::size_t>(n) + 1, 0);
-    parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
-      std::vector<int>& buf = buffers_[static_cast<std::size_t>(c)];
-      buf.clear();
-      std::vector<Box> boxes;
-      std::vector<std::int64_t> prefix(static_cast<std::size_t>(keys_), 0);
-      typename detail::ImageVector<Chart>::type y(X.rows());
-      for (int i = begin; i < end; ++i) {
-        const std::size_t first = buf.size();
-        query_boxes(chart, X, i, reach, boxes);
-        for (const Box& box : boxes) {
-          for_cells_in(box, prefix, [&](int cell) {
-            for (int s = cell_start_[static_cast<std::size_t>(cell)];
-                 s < cell_start_[static_cast<std::size_t>(cell) + 1]; ++s) {
-              const int j = order_[static_cast<std::size_t>(s)];
-              if (j == i) continue;
-              if (chord2_of(chart, X, i, j, y) < chord2) buf.push_back(j);
-            }
-          });
+    if constexpr (!detail::PeriodicCells<Chart>) {
+      const std::size_t stride = static_cast<std::size_t>(total) + static_cast<std::size_t>(pad);
+      packed_.resize(stride * static_cast<std::size_t>(a));
+      parallel::for_each(total, [&](int s) {
+        const int j = order_[static_cast<std::size_t>(s)];
+        for (int k = 0; k < a; ++k) packed_[static_cast<std::size_t>(k) * stride + static_cast<std::size_t>(s)] = X(k, j);
+      });
+      for (int k = 0; k < a; ++k) {  // the padding: chords formed there are never kept
+        std::fill_n(packed_.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(k) * stride + static_cast<std::size_t>(total)), pad, Scalar(0));
+      }
+    }
+    const int chunks = parallel::chunks_for(total);
+    if (scratch_.size() < static_cast<std::size_t>(chunks)) scratch_.resize(static_cast<std::size_t>(chunks));
+    slot_start_.resize(static_cast<std::size_t>(total));
+    out.offset.assign(static_cast<std::size_t>(rows) + 1, 0);
+    const bool minkowski = chart.curvature() < Scalar(0);
+    parallel::for_chunks(total, chunks, [&](int begin, int end, int c) {
+      Scratch& w = scratch_[static_cast<std::size_t>(c)];
+      // Capacity for a quarter more than the last build found, grown to twice that when short,
+      // so that a build allocates only when a chunk's rows grow by half (not per rebuild).
+      const std::size_t want = w.buf.size() + w.buf.size() / 4;
+      w.buf.clear();
+      if (w.buf.capacity() < want) w.buf.reserve(2 * want);
+      w.key.resize(static_cast<std::size_t>(keys_));
+      // The minimum image's scratch, on a periodic box only (elsewhere a dynamic-size vector
+      // would be an allocation per build).
+      using Image = std::conditional_t<detail::PeriodicCells<Chart>, typename detail::ImageVector<Chart>::type, int>;
+      Image y(a);
+      static_cast<void>(y);
+      // The cell of slot `begin`: the last cell starting at or before it.
+      int cell = static_cast<int>(std::upper_bound(cell_start_.begin(), cell_start_.end(), begin) - cell_start_.begin()) - 1;
+      int spans_of = -1;  // the cell whose query box w.spans holds (off H^n)
+      for (int s = begin; s < end; ++s) {
+        while (cell_start_[static_cast<std::size_t>(cell) + 1] <= s) ++cell;
+        const int i = order_[static_cast<std::size_t>(s)];
+        if (i >= rows) continue;  // a ghost: no row of its own
+        if (chart.curvature() < Scalar(0) || spans_of != cell) {
+          query_boxes(chart, X, i, reach, w.boxes);
+          w.spans.clear();
+          int row = 0;
+          for (const Box& box : w.boxes) {
+            for_rows_in(box, w.key, w.hints, row, [&](int s0, int s1) { w.spans.emplace_back(s0, s1); });
+          }
+          spans_of = cell;
         }
-        std::sort(buf.begin() + static_cast<std::ptrdiff_t>(first), buf.end());
-        out.offset[static_cast<std::size_t>(i) + 1] = static_cast<int>(buf.size() - first);
+        const std::size_t first = w.buf.size();
+        slot_start_[static_cast<std::size_t>(s)] = static_cast<int>(first);
+        if constexpr (detail::PeriodicCells<Chart>) {
+          for (const auto& span : w.spans) {
+            for (int t = span.first; t < span.second; ++t) {
+              const int j = order_[static_cast<std::size_t>(t)];
+              if (j == i) continue;
+              if (chord2_of(chart, X, i, j, y) < chord2) w.buf.push_back(j);
+            }
+          }
+        } else if (minkowski) {
+          scan_dispatch<true>(a, s, chord2, w);
+        } else {
+          scan_dispatch<false>(a, s, chord2, w);
+        }
+        sort_row(w.buf.data() + first, w.buf.data() + w.buf.size());
+        out.offset[static_cast<std::size_t>(i) + 1] = static_cast<int>(w.buf.size() - first);
       }
     });
-    for (int i = 0; i < n; ++i) out.offset[static_cast<std::size_t>(i) + 1] += out.offset[static_cast<std::size_t>(i)];
-    out.index.resize(static_cast<std::size_t>(out.offset.back()));
-    parallel::for_chunks(n, chunks, [&](int begin, int, int c) {
-      const std::vector<int>& buf = buffers_[static_cast<std::size_t>(c)];
-      std::copy(buf.begin(), buf.end(), out.index.begin() + out.offset[static_cast<std::size_t>(begin)]);
+    for (int i = 0; i < rows; ++i) out.offset[static_cast<std::size_t>(i) + 1] += out.offset[static_cast<std::size_t>(i)];
+    const std::size_t pairs = static_cast<std::size_t>(out.offset.back());
+    if (out.index.capacity() < pairs) out.index.reserve(pairs + pairs / 4);  // slack: later builds do not allocate
+    out.index.resize(pairs);
+    if (out.visit_order.capacity() < static_cast<std::size_t>(rows)) out.visit_order.reserve(static_cast<std::size_t>(rows));
+    out.visit_order.clear();
+    for (int s = 0; s < total; ++s) {
+      const int i = order_[static_cast<std::size_t>(s)];
+      if (i < rows) out.visit_order.push_back(i);
+    }
+    parallel::for_chunks(total, chunks, [&](int begin, int end, int c) {
+      const std::vector<int>& buf = scratch_[static_cast<std::size_t>(c)].buf;
+      for (int s = begin; s < end; ++s) {
+        const int i = order_[static_cast<std::size_t>(s)];
+        if (i >= rows) continue;
+        const int from = slot_start_[static_cast<std::size_t>(s)];
+        const int count = out.end(i) - out.begin(i);
+        std::copy(buf.begin() + from, buf.begin() + from + count, out.index.begin() + out.begin(i));
+      }
     });
+  }
+
+  /// A row in ascending order: an insertion sort for the short rows of a pair cutoff (no call to
+  /// memmove for every element, as std::sort's has), std::sort for long ones.
+  static void sort_row(int* first, int* last) {
+    if (last - first > 48) {
+      std::sort(first, last);
+      return;
+    }
+    for (int* p = first + 1; p < last; ++p) {
+      const int v = *p;
+      int* q = p;
+      while (q > first && q[-1] > v) {
+        *q = q[-1];
+        --q;
+      }
+      *q = v;
+    }
+  }
+
+  /// Per chunk of build_rows: query boxes, a key, the candidate runs of slots, the rows found.
+  struct Scratch {
+    std::vector<Box> boxes;
+    std::vector<std::int64_t> key;
+    std::vector<std::pair<int, int>> spans;
+    std::vector<int> hints;  // for_rows_in's
+    std::vector<int> buf;
+  };
+
+  /// The candidates of slot s (packed_) within chord2, appended to w.buf: the chord as chord2_of
+  /// forms it (coordinates in ascending order, then the time-like correction on H^n), A the
+  /// ambient dimension when known at compile time (0: a).
+  template <bool Minkowski>
+  void scan_dispatch(int a, int s, Scalar chord2, Scratch& w) const {
+    std::size_t candidates = 0;
+    for (const auto& span : w.spans) candidates += static_cast<std::size_t>(span.second - span.first);
+    const std::size_t at = w.buf.size();
+    w.buf.resize(at + candidates);
+    int* dst = w.buf.data() + at;
+    int kept = 0;
+    switch (a) {
+      case 2: kept = scan<2, Minkowski>(a, s, chord2, w, dst); break;
+      case 3: kept = scan<3, Minkowski>(a, s, chord2, w, dst); break;
+      case 4: kept = scan<4, Minkowski>(a, s, chord2, w, dst); break;
+      default: kept = scan<0, Minkowski>(a, s, chord2, w, dst); break;
+    }
+    w.buf.resize(at + static_cast<std::size_t>(kept));
+  }
+  /// Chords a block of `pad` slots at a time (a loop of fixed length, which the compiler
+  /// vectorises; packed_ has pad slots of padding at the end of each coordinate), then the
+  /// partners kept without a branch.
+  static constexpr int pad = 4;
+  template <int A, bool Minkowski>
+  int scan(int a_run, int s, Scalar chord2, const Scratch& w, int* dst) const {
+    const int a = A > 0 ? A : a_run;
+    const std::size_t stride = order_.size() + static_cast<std::size_t>(pad);
+    const Scalar* p = packed_.data();
+    alignas(64) Scalar c2[pad];
+    int kept = 0;
+    for (const auto& span : w.spans) {
+      for (int t0 = span.first; t0 < span.second; t0 += pad) {
+        const int m = std::min(pad, span.second - t0);
+        for (int q = 0; q < pad; ++q) c2[q] = Scalar(0);
+        for (int k = 0; k < a; ++k) {
+          const Scalar* pk = p + static_cast<std::size_t>(k) * stride;
+          const Scalar x = pk[s];
+          const Scalar* pt = pk + t0;
+          for (int q = 0; q < pad; ++q) {
+            const Scalar u = x - pt[q];
+            c2[q] += u * u;
+          }
+        }
+        if constexpr (Minkowski) {
+          const Scalar* pk = p + static_cast<std::size_t>(a - 1) * stride;
+          const Scalar x = pk[s];
+          const Scalar* pt = pk + t0;
+          for (int q = 0; q < pad; ++q) {
+            const Scalar u = x - pt[q];
+            c2[q] -= Scalar(2) * u * u;
+          }
+        }
+        const int* id = order_.data() + t0;
+        for (int q = 0; q < m; ++q) {
+          dst[kept] = id[q];
+          kept += (c2[q] < chord2) & (t0 + q != s);
+        }
+      }
+    }
+    return kept;
   }
 
   // ---- compact hyperbolic surfaces: ghost images ----------------------------------------------
@@ -382,22 +544,79 @@ class NeighbourIndex {
         for (int d = 0; d < a; ++d) k[d] = cell_of(X(d, i) / side_);
       });
     }
-    order_.resize(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) order_[static_cast<std::size_t>(i)] = i;
-    std::sort(order_.begin(), order_.end(), [&](int i, int j) {
-      const int c = compare(key_ptr(i), key_ptr(j));
-      return c != 0 ? c < 0 : i < j;
-    });
-    cell_key_.clear();
-    cell_start_.clear();
+    sort_by_key(n);
+    // The runs of equal keys (capacities kept: no allocation after the first build).
+    cell_key_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_));
+    cell_start_.resize(static_cast<std::size_t>(n) + 1);
+    std::size_t cells = 0;
     for (int s = 0; s < n; ++s) {
       const std::int64_t* k = key_ptr(order_[static_cast<std::size_t>(s)]);
       if (s == 0 || compare(k, key_ptr(order_[static_cast<std::size_t>(s) - 1])) != 0) {
-        cell_key_.insert(cell_key_.end(), k, k + keys_);
-        cell_start_.push_back(s);
+        std::copy(k, k + keys_, cell_key_.begin() + static_cast<std::ptrdiff_t>(cells * static_cast<std::size_t>(keys_)));
+        cell_start_[cells++] = s;
       }
     }
-    cell_start_.push_back(n);
+    cell_key_.resize(cells * static_cast<std::size_t>(keys_));
+    cell_start_.resize(cells + 1);
+    cell_start_[cells] = n;
+  }
+
+  /// order_: the bodies sorted by (key, index). Where the keys' bounding box has fewer than
+  /// 2^62 cells, by a stable radix sort of the cells' row-major numbers in it (the same order
+  /// as the keys', lexicographic); else by comparisons.
+  void sort_by_key(int n) {
+    order_.resize(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) order_[static_cast<std::size_t>(i)] = i;
+    if (n == 0) return;
+    key_low_.assign(static_cast<std::size_t>(keys_), std::numeric_limits<std::int64_t>::max());
+    std::vector<std::int64_t>& high = key_high_;
+    high.assign(static_cast<std::size_t>(keys_), std::numeric_limits<std::int64_t>::min());
+    for (int i = 0; i < n; ++i) {
+      const std::int64_t* k = key_ptr(i);
+      for (int d = 0; d < keys_; ++d) {
+        key_low_[static_cast<std::size_t>(d)] = std::min(key_low_[static_cast<std::size_t>(d)], k[d]);
+        high[static_cast<std::size_t>(d)] = std::max(high[static_cast<std::size_t>(d)], k[d]);
+      }
+    }
+    // The cells of the bounding box, while below 2^62 (keys lie within +-2^60: no overflow).
+    constexpr std::uint64_t most = std::uint64_t(1) << 62;
+    std::uint64_t count = 1;
+    for (int d = 0; d < keys_ && count < most; ++d) {
+      const std::uint64_t side = static_cast<std::uint64_t>(high[static_cast<std::size_t>(d)] - key_low_[static_cast<std::size_t>(d)]) + 1;
+      count = side >= most || count > most / side ? most : count * side;
+    }
+    if (count >= most) {
+      std::sort(order_.begin(), order_.end(), [&](int i, int j) {
+        const int c = compare(key_ptr(i), key_ptr(j));
+        return c != 0 ? c < 0 : i < j;
+      });
+      return;
+    }
+    cell_number_.resize(static_cast<std::size_t>(n));
+    parallel::for_each(n, [&](int i) {
+      const std::int64_t* k = key_ptr(i);
+      std::uint64_t number = 0;
+      for (int d = 0; d < keys_; ++d) {
+        const std::uint64_t side = static_cast<std::uint64_t>(high[static_cast<std::size_t>(d)] - key_low_[static_cast<std::size_t>(d)]) + 1;
+        number = number * side + static_cast<std::uint64_t>(k[d] - key_low_[static_cast<std::size_t>(d)]);
+      }
+      cell_number_[static_cast<std::size_t>(i)] = number;
+    });
+    // LSD radix sort, 11 bits a pass: stable, so ties stay in index order.
+    constexpr int bits = 11;
+    constexpr std::size_t buckets = std::size_t(1) << bits;
+    int passes = 0;
+    while (passes * bits < 64 && (count - 1) >> (passes * bits) != 0) ++passes;
+    order_tmp_.resize(static_cast<std::size_t>(n));
+    bucket_.resize(buckets + 1);
+    for (int pass = 0; pass < passes; ++pass) {
+      const int shift = pass * bits;
+      std::fill(bucket_.begin(), bucket_.end(), 0);
+      for (int i : order_) ++bucket_[((cell_number_[static_cast<std::size_t>(i)] >> shift) & (buckets - 1)) + 1];
+      for (std::size_t b = 1; b <= buckets; ++b) bucket_[b] += bucket_[b - 1];
+      for (int i : order_) order_tmp_[static_cast<std::size_t>(bucket_[(cell_number_[static_cast<std::size_t>(i)] >> shift) & (buckets - 1)]++)] = i;
+      order_.swap(order_tmp_);
+    }
   }
 
   // ---- H^n: upper half-space coordinates ------------------------------------------------------
@@ -533,7 +752,7 @@ class NeighbourIndex {
     const Scalar y = height_[static_cast<std::size_t>(i)];
     const Scalar u = radius_ * std::log(y / radius_);
     const std::int64_t first = cell_of((u - r) / band_), last = cell_of((u + r) / band_);
-    boxes.clear();
+    boxes.resize(static_cast<std::size_t>(last - first + 1));  // (resized, not rebuilt: no allocation)
     for (std::int64_t band = first; band <= last; ++band) {
       const Scalar bottom = radius_ * exp(static_cast<Scalar>(band) * band_ / radius_);
       const Scalar top = bottom * exp(band_ / radius_);
@@ -543,7 +762,7 @@ class NeighbourIndex {
       const Scalar off = nearest - centre;
       const Scalar reach_w = sqrt(std::max(Scalar(0), half * half - off * off)) * Scalar(1 + 1e-6);
       const Scalar width = box_width(band);
-      Box b;
+      Box& b = boxes[static_cast<std::size_t>(band - first)];
       b.lo.assign(static_cast<std::size_t>(keys_), band);
       b.hi.assign(static_cast<std::size_t>(keys_), band);
       for (int d = 1; d < keys_; ++d) {
@@ -551,29 +770,63 @@ class NeighbourIndex {
         b.lo[static_cast<std::size_t>(d)] = cell_of((w - reach_w) / width);
         b.hi[static_cast<std::size_t>(d)] = cell_of((w + reach_w) / width);
       }
-      boxes.push_back(std::move(b));
     }
   }
 
-  /// f(cell) for every occupied cell in box: an odometer over all key coordinates but the last,
-  /// and one binary search per row for the run of the last.
+  /// f(s0, s1) for the slots [s0, s1) of order_ in each row of box: an odometer over all key
+  /// coordinates but the last, and one search per row for the run of occupied cells of the last
+  /// (contiguous in order_). The search gallops from hints[row], where the same row of the last
+  /// query began (nearby when cells are queried in order), then bisects.
   template <class F>
-  void for_cells_in(const Box& box, std::vector<std::int64_t>& key, F&& f) const {
+  void for_rows_in(const Box& box, std::vector<std::int64_t>& key, std::vector<int>& hints, int& row, F&& f) const {
     const int last = keys_ - 1;
     for (int d = 0; d < keys_; ++d) key[static_cast<std::size_t>(d)] = box.lo[static_cast<std::size_t>(d)];
     const int cells = static_cast<int>(cell_start_.size()) - 1;
     while (true) {
       key[static_cast<std::size_t>(last)] = box.lo[static_cast<std::size_t>(last)];
-      int lo = 0, hi = cells;  // first cell >= key
+      if (static_cast<std::size_t>(row) >= hints.size()) hints.resize(static_cast<std::size_t>(row) + 1, 0);
+      int& hint = hints[static_cast<std::size_t>(row)];
+      ++row;
+      // [lo, hi] brackets the first cell >= key: below lo all cells are < key, hi's is >= key (or hi = cells).
+      int lo = 0, hi = cells;
+      const int h = std::min(std::max(hint, 0), cells);
+      if (h < cells && compare(cell_ptr(h), key.data()) < 0) {
+        lo = h + 1;
+        for (int step = 1;; step *= 2) {
+          const int probe = h + step;
+          if (probe >= cells) break;
+          if (compare(cell_ptr(probe), key.data()) < 0) {
+            lo = probe + 1;
+          } else {
+            hi = probe;
+            break;
+          }
+          if (step > cells) break;
+        }
+      } else {
+        hi = h;
+        for (int step = 1;; step *= 2) {
+          const int probe = h - step;
+          if (probe < 0) break;
+          if (compare(cell_ptr(probe), key.data()) < 0) {
+            lo = probe + 1;
+            break;
+          }
+          hi = probe;
+          if (step > cells) break;
+        }
+      }
       while (lo < hi) {
         const int mid = (lo + hi) / 2;
         if (compare(cell_ptr(mid), key.data()) < 0) lo = mid + 1; else hi = mid;
       }
-      for (int c = lo; c < cells; ++c) {
+      int c = lo;
+      for (; c < cells; ++c) {
         const std::int64_t* k = cell_ptr(c);
         if (compare_prefix(k, key.data(), last) != 0 || k[last] > box.hi[static_cast<std::size_t>(last)]) break;
-        f(c);
       }
+      hint = lo;
+      if (c > lo) f(cell_start_[static_cast<std::size_t>(lo)], cell_start_[static_cast<std::size_t>(c)]);
       int d = last - 1;  // next row
       while (d >= 0) {
         if (++key[static_cast<std::size_t>(d)] <= box.hi[static_cast<std::size_t>(d)]) break;
@@ -601,9 +854,15 @@ class NeighbourIndex {
   int keys_ = 0;
   std::vector<std::int64_t> key_;       // per body, keys_ each
   std::vector<int> order_;              // bodies sorted by (key, index)
+  std::vector<int> order_tmp_, bucket_;  // sort_by_key's radix sort
+  std::vector<std::uint64_t> cell_number_;         // sort_by_key: per body, its cell's number in the keys' box
+  std::vector<std::int64_t> key_low_, key_high_;  // sort_by_key: the keys' bounding box
   std::vector<std::int64_t> cell_key_;  // per occupied cell, keys_ each, ascending
   std::vector<int> cell_start_;         // cell c holds order_[cell_start_[c] .. cell_start_[c+1])
-  std::vector<std::vector<int>> buffers_;
+  std::vector<Scratch> scratch_;        // per chunk of build_rows
+  std::vector<Scalar> packed_;          // S^n, E^n, H^n: the points in the order of order_, coordinate by
+                                        // coordinate (each followed by pad slots of padding)
+  std::vector<int> slot_start_;         // per slot of order_: where its row starts in its chunk's buffer
   Scalar side_ = 1;                     // S^n, E^n: the cells' side
   std::vector<std::int64_t> cells_;     // periodic box: cells per axis
   std::vector<Scalar> cell_side_;       // periodic box: their side per axis
@@ -638,6 +897,7 @@ class VerletList {
   const NeighbourLists& update(const Chart& chart, const Matrix& X, Scalar range) {
     const Scalar skin = skin_fraction * range;
     if (!valid(chart, X, range, skin)) {
+      profile::Scope scope(profile::Phase::neighbours);
       index_.build(chart, X, range + skin, lists_);
       built_at_ = X;
       range_ = range;
@@ -650,6 +910,8 @@ class VerletList {
   }
   /// Rebuilds so far.
   long builds() const { return builds_; }
+  /// The bodies in the cell order of the last build (NeighbourLists::visit_order).
+  const std::vector<int>& visit_order() const { return lists_.visit_order; }
   /// Forget the lists (the next update rebuilds).
   void clear() { built_at_.resize(0, 0); }
 
@@ -661,7 +923,8 @@ class VerletList {
       return false;
     }
     const int n = static_cast<int>(X.cols());
-    std::vector<char> moved(static_cast<std::size_t>(n), 0);
+    std::vector<char>& moved = moved_;  // kept: an update allocates nothing
+    moved.assign(static_cast<std::size_t>(n), 0);
     if constexpr (detail::PeriodicCells<Chart>) {
       // The displacement to the nearest image of the point at the build: a body brought back
       // into the box has moved by its true displacement only (below L/2 while it is below the
@@ -695,6 +958,7 @@ class VerletList {
 
   NeighbourIndex<Chart> index_;
   NeighbourLists lists_;
+  mutable std::vector<char> moved_;  // valid's scratch
   Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> built_at_;
   Scalar range_ = 0, skin_ = 0, half_skin_chord2_ = 0;
   long builds_ = 0;

@@ -19,6 +19,8 @@
 #include <thread>
 #include <vector>
 
+#include "sesi/profile.hpp"
+
 #if defined(_OPENMP)
 #include <omp.h>
 #endif
@@ -30,6 +32,11 @@ namespace sesi::parallel {
 /// "Threads"): below ~256 bodies a level flow or a pair row costs less than waking a second
 /// thread, and a 300-body Lennard-Jones run was slower on two threads than on one.
 inline constexpr int min_parallel_bodies = 256;
+
+/// Whether a loop over n bodies is shared among threads when there are two or more (n >= 2
+/// min_parallel_bodies, threads_for): a profile counts such a loop as a parallel region even when
+/// it runs on one thread, so that a one-thread profile shows the serial part Amdahl's law charges.
+inline constexpr bool shared_loop(int n) { return n / min_parallel_bodies >= 2; }
 
 namespace detail {
 inline int& thread_setting() {
@@ -140,6 +147,7 @@ class Team {
 
   void work(int k) {
     inside() = true;
+    profile::set_thread_slot(k);  // a profile charges this thread's chunks to slot k + 1
     std::unique_lock<std::mutex> lock(mutex_);
     unsigned long seen = generation_;
     while (true) {
@@ -169,13 +177,16 @@ void for_chunks_on_threads(int n, int chunks, F& f) {
     std::exception_ptr failure;
     int failed_chunk;
     std::mutex guard;
-  } loop{f, n, chunks, nullptr, chunks, {}};
+    const profile::Loop& profiled;
+  };
+  const profile::Loop profiled;  // the loop's wall time, and each chunk's on its thread
+  Loop loop{f, n, chunks, nullptr, chunks, {}, profiled};
   const auto call = [](void* context, int c) {
     Loop& l = *static_cast<Loop*>(context);
     const int begin = static_cast<int>(static_cast<long long>(l.n) * c / l.chunks);
     const int end = static_cast<int>(static_cast<long long>(l.n) * (c + 1) / l.chunks);
     try {
-      l.f(begin, end, c);
+      l.profiled.chunk([&] { l.f(begin, end, c); });
     } catch (...) {
       const std::lock_guard<std::mutex> lock(l.guard);
       if (c < l.failed_chunk) {
@@ -201,8 +212,9 @@ template <class F>
 void for_chunks(int n, int chunks, F&& f) {
   if (n <= 0) return;
   chunks = std::max(1, std::min(chunks, n));
-  if (chunks == 1) {
-    f(0, n, 0);
+  if (chunks == 1) {  // a parallel region in a profile if it would share out on more threads
+    const profile::Loop profiled(shared_loop(n));
+    profiled.chunk([&] { f(0, n, 0); });
     return;
   }
   detail::for_chunks_on_threads(n, chunks, f);

@@ -8,6 +8,7 @@
 /// direction, and (q, p) are transformed by the cotangent lift of the chart change, which is
 /// canonical, so the method stays symplectic and explicit. Potentials see world points only.
 
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <functional>
@@ -17,6 +18,7 @@
 #include <Eigen/Core>
 
 #include "sesi/chart.hpp"
+#include "sesi/parallel.hpp"
 #include "sesi/state.hpp"
 #include "sesi/stepper.hpp"
 #include "sesi/topology.hpp"
@@ -248,32 +250,40 @@ Recharted rechart(const Sys& sys, State<typename Sys::Chart>& s,
     if (s.clustered && recentre(sys, s, policy)) ++done.recentred;
     const Chart& chart = sys.chart();
     if (!s.framed()) s.enable_frames(ambient_dim_of(chart));
-    typename Chart::Point q(dim_of(chart)), p(dim_of(chart));
-    typename Chart::Ambient x(ambient_dim_of(chart)), v(ambient_dim_of(chart));
-    typename State<Chart>::Frame change(ambient_dim_of(chart), ambient_dim_of(chart));
-    for (int b = 0; b < s.bodies(); ++b) {
-      q = s.q.col(b);
-      p = s.p.col(b);
-      const RechartAction action = chart.rechart_action(q, p, policy);
-      if (action == RechartAction::none) continue;
-      if (action == RechartAction::turn) {
-        chart.turn(q, change);
-        s.p.col(b) = -p;
-        ++done.turned;
-      } else {
-        chart.embed(q, x);
-        chart.velocity(q, p, sys.mass(b), v);
-        // The change L is computed from the body's point in its current chart, where all
-        // entries are moderate (the policy keeps it there), and composed: world = F L x_new. On
-        // H^n this keeps every L well conditioned however far the body is from the world origin.
-        chart.home(x, v, sys.mass(b), policy, change, q, p);
-        s.q.col(b) = q;
-        s.p.col(b) = p;
-        ++done.homed;
+    // Every body on its own (it writes only its own q, p and frame), in chunks on threads: the
+    // test is a pass over all the bodies at every step. (Whole counts: any order adds the same.)
+    const int n = s.bodies();
+    std::atomic<int> turned{0}, homed{0};
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      typename Chart::Point q(dim_of(chart)), p(dim_of(chart));
+      typename Chart::Ambient x(ambient_dim_of(chart)), v(ambient_dim_of(chart));
+      typename State<Chart>::Frame change(ambient_dim_of(chart), ambient_dim_of(chart));
+      for (int b = begin; b < end; ++b) {
+        q = s.q.col(b);
+        p = s.p.col(b);
+        const RechartAction action = chart.rechart_action(q, p, policy);
+        if (action == RechartAction::none) continue;
+        if (action == RechartAction::turn) {
+          chart.turn(q, change);
+          s.p.col(b) = -p;
+          turned.fetch_add(1, std::memory_order_relaxed);
+        } else {
+          chart.embed(q, x);
+          chart.velocity(q, p, sys.mass(b), v);
+          // The change L is computed from the body's point in its current chart, where all
+          // entries are moderate (the policy keeps it there), and composed: world = F L x_new. On
+          // H^n this keeps every L well conditioned however far the body is from the world origin.
+          chart.home(x, v, sys.mass(b), policy, change, q, p);
+          s.q.col(b) = q;
+          s.p.col(b) = p;
+          homed.fetch_add(1, std::memory_order_relaxed);
+        }
+        auto& frame = s.frames[static_cast<std::size_t>(b)];
+        frame = (frame * change).eval();
       }
-      auto& frame = s.frames[static_cast<std::size_t>(b)];
-      frame = (frame * change).eval();
-    }
+    });
+    done.turned = turned.load();
+    done.homed = homed.load();
   }
   return done;
 }
@@ -293,31 +303,34 @@ State<typename Sys::Chart> in_world_chart(const Sys& sys, const State<typename S
   if constexpr (Rechartable<Chart>) {
     if (!s.framed() && !s.clustered) return out;
     const Chart& chart = sys.chart();
-    typename Chart::Point q(dim_of(chart)), p(dim_of(chart));
-    typename Chart::Ambient x(ambient_dim_of(chart)), v(ambient_dim_of(chart));
-    typename State<Chart>::Frame frame(ambient_dim_of(chart), ambient_dim_of(chart));
-    for (int b = 0; b < s.bodies(); ++b) {
-      // World = C F_b embed(q_b) (C: the cluster frame, if any). Far out this reading is as
-      // ill-conditioned as the chart itself (docs/charts.md, "The cluster frame").
-      if (s.framed()) {
-        frame = s.frames[static_cast<std::size_t>(b)];
-      } else {
-        frame.setIdentity(ambient_dim_of(chart), ambient_dim_of(chart));
+    // Body by body on threads: each writes its own columns.
+    parallel::for_chunks(s.bodies(), parallel::chunks_for(s.bodies()), [&](int begin, int end, int) {
+      typename Chart::Point q(dim_of(chart)), p(dim_of(chart));
+      typename Chart::Ambient x(ambient_dim_of(chart)), v(ambient_dim_of(chart));
+      typename State<Chart>::Frame frame(ambient_dim_of(chart), ambient_dim_of(chart));
+      for (int b = begin; b < end; ++b) {
+        // World = C F_b embed(q_b) (C: the cluster frame, if any). Far out this reading is as
+        // ill-conditioned as the chart itself (docs/charts.md, "The cluster frame").
+        if (s.framed()) {
+          frame = s.frames[static_cast<std::size_t>(b)];
+        } else {
+          frame.setIdentity(ambient_dim_of(chart), ambient_dim_of(chart));
+        }
+        if (s.clustered) frame = (s.cluster * frame).eval();
+        // A body never re-charted keeps its coordinates as they are (angles unwrapped).
+        if (frame.isIdentity(Scalar(0))) continue;
+        q = s.q.col(b);
+        p = s.p.col(b);
+        chart.embed(q, x);
+        chart.velocity(q, p, sys.mass(b), v);
+        x = (frame * x).eval();
+        v = (frame * v).eval();
+        chart.chart(x, q);
+        chart.momentum(q, v, sys.mass(b), p);
+        out.q.col(b) = q;
+        out.p.col(b) = p;
       }
-      if (s.clustered) frame = (s.cluster * frame).eval();
-      // A body never re-charted keeps its coordinates as they are (angles unwrapped).
-      if (frame.isIdentity(Scalar(0))) continue;
-      q = s.q.col(b);
-      p = s.p.col(b);
-      chart.embed(q, x);
-      chart.velocity(q, p, sys.mass(b), v);
-      x = (frame * x).eval();
-      v = (frame * v).eval();
-      chart.chart(x, q);
-      chart.momentum(q, v, sys.mass(b), p);
-      out.q.col(b) = q;
-      out.p.col(b) = p;
-    }
+    });
   }
   return out;
 }

@@ -34,6 +34,7 @@
 /// sesi/odeint.hpp adds the stepper_category tag so that integrate_const drives them.
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <type_traits>
@@ -43,6 +44,7 @@
 
 #include "sesi/chart.hpp"
 #include "sesi/coefficients.hpp"
+#include "sesi/profile.hpp"
 #include "sesi/state.hpp"
 #include "sesi/system.hpp"
 
@@ -84,6 +86,28 @@ void cached_level_flow(const Chart& chart, Workspace<Chart>& ws, int b, int i, t
   }
 }
 
+/// Whether a and b have the same shape and numbers (a NaN differs from itself), compared column
+/// by column on threads.
+template <class M>
+bool same_columns(const M& a, const M& b) {
+  if (a.rows() != b.rows() || a.cols() != b.cols()) return false;
+  const int n = static_cast<int>(a.cols());
+  std::atomic<bool> differ{false};
+  parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+    if (a.middleCols(begin, end - begin) != b.middleCols(begin, end - begin)) differ.store(true, std::memory_order_relaxed);
+  });
+  return !differ.load();
+}
+/// to = from (sized as from), copied column by column on threads.
+template <class M>
+void copy_columns(const M& from, M& to) {
+  if (to.rows() != from.rows() || to.cols() != from.cols()) to.resize(from.rows(), from.cols());
+  const int n = static_cast<int>(from.cols());
+  parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+    to.middleCols(begin, end - begin) = from.middleCols(begin, end - begin);
+  });
+}
+
 /// The last kick's gradient dV/dq and what it depended on (the system, the body frames, the
 /// cluster frame), so that a step whose first kick is at the point of the last step's last kick
 /// reuses it (first same as last, as odeint's velocity_verlet keeps its acceleration).
@@ -98,18 +122,51 @@ class KeptGradient {
   template <class Sys>
   bool valid(const Sys& sys, const state_type& x, bool q_unchanged) const {
     return q_unchanged && grad_.cols() == x.p.cols() && grad_.rows() == x.p.rows() && same_system(sys) &&
-           frames_ == x.frames && clustered_ == x.clustered && (!x.clustered || cluster_ == x.cluster);
+           clustered_ == x.clustered && (!x.clustered || cluster_ == x.cluster) && same_frames(frames_, x.frames);
   }
-  /// Record what the gradient just computed into gradient() depends on.
+  /// Record what the gradient just computed into gradient() depends on (frames_kept: the kept
+  /// frames are x's already, as when the step reused the kept gradient: a copy the less).
   template <class Sys>
-  void keep(const Sys& sys, const state_type& x) {
+  void keep(const Sys& sys, const state_type& x, bool frames_kept = false) {
     system_ = &sys;
     if constexpr (requires { sys.instance(); }) instance_ = sys.instance();
-    frames_ = x.frames;
+    if (!frames_kept) frames_ = x.frames;
     clustered_ = x.clustered;
     if (x.clustered) cluster_ = x.cluster;
   }
   void forget() { system_ = nullptr; }
+
+  /// Whether the kept gradient is of sys at a state of x's shape, framing and cluster frame:
+  /// then out gets the bodies (ascending) whose q (against last_q) or frame differ from the kept
+  /// gradient's, the ones System::patch_gradient brings it up to date for.
+  template <class Sys>
+  bool changed_bodies(const Sys& sys, const state_type& x, const typename state_type::Matrix& last_q,
+                      std::vector<int>& out) {
+    if (grad_.cols() != x.p.cols() || grad_.rows() != x.p.rows() || last_q.cols() != x.q.cols() ||
+        last_q.rows() != x.q.rows() || !same_system(sys) || frames_.size() != x.frames.size() ||
+        clustered_ != x.clustered || (x.clustered && cluster_ != x.cluster)) {
+      return false;
+    }
+    // Marked on threads (each body its own mark), collected in body order.
+    const int n = static_cast<int>(x.q.cols());
+    marks_.resize(static_cast<std::size_t>(n));
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      for (int b = begin; b < end; ++b) {
+        const std::size_t k = static_cast<std::size_t>(b);
+        marks_[k] = last_q.col(b) != x.q.col(b) || (!frames_.empty() && frames_[k] != x.frames[k]);
+      }
+    });
+    out.clear();
+    for (int b = 0; b < n; ++b) {
+      if (marks_[static_cast<std::size_t>(b)]) out.push_back(b);
+    }
+    return true;
+  }
+  /// After a patch: the changed bodies' frames are the kept gradient's now.
+  void keep_frames(const state_type& x, const std::vector<int>& changed) {
+    if (frames_.empty()) return;
+    for (const int b : changed) frames_[static_cast<std::size_t>(b)] = x.frames[static_cast<std::size_t>(b)];
+  }
 
  private:
   /// Whether sys is the system of the kept gradient: by its stamp (sesi::System), else by its
@@ -123,7 +180,22 @@ class KeptGradient {
     }
   }
 
+  /// Whether two lists of frames are equal, compared on threads.
+  static bool same_frames(const std::vector<typename state_type::Frame>& a,
+                          const std::vector<typename state_type::Frame>& b) {
+    if (a.size() != b.size()) return false;
+    const int n = static_cast<int>(a.size());
+    std::atomic<bool> differ{false};
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      for (int k = begin; k < end && !differ.load(std::memory_order_relaxed); ++k) {
+        if (a[static_cast<std::size_t>(k)] != b[static_cast<std::size_t>(k)]) differ.store(true, std::memory_order_relaxed);
+      }
+    });
+    return !differ.load();
+  }
+
   typename state_type::Matrix grad_;
+  std::vector<char> marks_;  // changed_bodies' marks
   const void* system_ = nullptr;
   std::uint64_t instance_ = 0;  // sesi::System's stamp: its address is no identity
   std::vector<typename state_type::Frame> frames_;
@@ -209,16 +281,21 @@ class Composition {
     using Raw = std::remove_cvref_t<Sys>;
     const auto& sys = detail::unwrap<Raw>::get(system);
     // The trig caches left by the last step are valid if q is what that step produced.
-    const bool q_unchanged =
-        last_q_.cols() == x.q.cols() && last_q_.rows() == x.q.rows() && last_q_ == x.q;
+    bool q_unchanged = detail::same_columns(last_q_, x.q);
+    // A few bodies re-charted since (Recharting, a topology's reduction): their trig and the
+    // gradient rows that depend on them are brought up to date, the rest kept.
+    if (!q_unchanged) q_unchanged = patch(sys, x);
     if (!q_unchanged) sys.refresh(x, ws_);  // sizes the workspace; one sine and cosine per coordinate
     if constexpr (Form == Splitting::drift_kick_drift) {
       step_dkd(sys, x, dt);
     } else {
       step_kdk(sys, x, dt, q_unchanged);
     }
-    last_q_ = x.q;
+    detail::copy_columns(x.q, last_q_);
   }
+
+  /// The step's workspace (its Verlet lists serve diagnostics at the same points: share_lists).
+  Workspace<Chart>& workspace() { return ws_; }
 
   /// Forget what the last step left (the trig caches and the last gradient), e.g. after changing
   /// the system's parameters in place; do_step notices a new q, new frames or another system
@@ -239,6 +316,7 @@ class Composition {
   /// on threads for many bodies (each body's flows touch only its own data).
   template <class Sys, class F>
   void each_body(const Sys& sys, state_type& x, F&& f) {
+    const profile::Scope drift(profile::Phase::drift);  // the K-flows (and a per-body stage hook)
     if (sys.bodies() < parallel::min_parallel_bodies) {  // the workspace's own q, p: no chunks
       for (int b = 0; b < sys.bodies(); ++b) {
         ws_.q = x.q.col(b);
@@ -311,6 +389,7 @@ class Composition {
       dt = stage_.time_step(dt);  // Brownian dynamics: the BAOAB limit's h for a time step dt
       outer = stage_.acts_on_total();
       inner = stage_.acts_on_bodies();
+      const profile::Scope thermostat(profile::Phase::thermostat);
       if (outer) stage_.total(sys, x, ws_, dt / Scalar(2), 0);
       if (inner) stage_.begin_bodies(sys.bodies(), dt);
     }
@@ -318,7 +397,11 @@ class Composition {
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar h = w_[k] * dt;
       if (k == 0 && reuse) {
-        x.p.noalias() -= pending * kept_.gradient();
+        // p -= h g, body by body on threads (the same bits as the whole matrix at once).
+        const auto& g = kept_.gradient();
+        parallel::for_chunks(sys.bodies(), parallel::chunks_for(sys.bodies()), [&](int begin, int end, int) {
+          x.p.middleCols(begin, end - begin).noalias() -= pending * g.middleCols(begin, end - begin);
+        });
       } else {
         sys.kick_cached(x, pending, ws_, kept_.gradient());
       }
@@ -353,17 +436,36 @@ class Composition {
       pending = h / Scalar(2) + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
     }
     sys.kick_cached(x, pending, ws_, kept_.gradient());
-    kept_.keep(sys, x);
+    kept_.keep(sys, x, /*frames_kept=*/reuse);  // (a step changes no frame)
     if constexpr (staged) {
+      const profile::Scope thermostat(profile::Phase::thermostat);
       if (inner) stage_.end_bodies();
       if (outer) stage_.total(sys, x, ws_, dt / Scalar(2), 1);
       stage_.end_step();
     }
   }
 
+  /// The kick-drift-kick form, when some bodies changed chart or frame since the last step's
+  /// last kick: System::patch_gradient on the kept gradient (and its trig), exact to the bit.
+  template <class Sys>
+  bool patch(const Sys& sys, const state_type& x) {
+    if constexpr (Form == Splitting::kick_drift_kick &&
+                  requires { sys.patch_gradient(x, ws_, changed_, kept_.gradient()); }) {
+      if (!kept_.changed_bodies(sys, x, last_q_, changed_) || changed_.empty()) return false;
+      if (!sys.patch_gradient(x, ws_, changed_, kept_.gradient())) return false;
+      kept_.keep_frames(x, changed_);
+      return true;
+    } else {
+      static_cast<void>(sys);
+      static_cast<void>(x);
+      return false;
+    }
+  }
+
   weights_type w_;
   [[no_unique_address]] std::conditional_t<runtime_table, order_type, std::monostate> order_{};
   Workspace<Chart> ws_;
+  std::vector<int> changed_;  // patch's changed bodies
   typename state_type::Matrix last_q_;  // q after the last step: its trig is in ws_
   detail::KeptGradient<Chart> kept_;  // the kick-drift-kick form's last gradient, at last_q_
   [[no_unique_address]] Stage stage_{};

@@ -17,6 +17,7 @@
 
 #include <cmath>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <concepts>
 #include <cstdint>
@@ -33,6 +34,7 @@
 #include "sesi/neighbours.hpp"
 #include "sesi/parallel.hpp"
 #include "sesi/potentials.hpp"
+#include "sesi/profile.hpp"
 #include "sesi/state.hpp"
 
 namespace sesi {
@@ -94,8 +96,31 @@ struct Workspace : TrigStore<Chart> {
   std::vector<Scalar> rows;
   /// Per term of the system (by position): the Verlet list of a short-range term.
   std::vector<VerletList<Chart>> verlet;
+  /// Another workspace's Verlet lists used instead of verlet (share_lists), or none.
+  struct Borrowed {
+    std::vector<VerletList<Chart>>* lists = nullptr;
+    Borrowed() = default;
+    Borrowed(const Borrowed&) {}  // a copy owns its lists: a borrow is its owner's arrangement
+    Borrowed& operator=(const Borrowed&) { return *this; }
+  } borrowed;
+  /// Use other's Verlet lists from now on (nullptr: its own again), e.g. diagnostics at the
+  /// points a stepper just evaluated, so that one neighbour structure serves both. The caller
+  /// keeps other alive and never uses the two workspaces at once. Results do not change: lists
+  /// are rebuilt whenever they do not fit the points (VerletList::update).
+  void share_lists(Workspace* other) { borrowed.lists = other ? &other->verlet : nullptr; }
+  std::vector<VerletList<Chart>>& lists() { return borrowed.lists ? *borrowed.lists : verlet; }
   /// The tiles' partial gradients and energies (System's symmetric pair sums on threads).
   std::vector<Scalar> tile_gradients, tile_energies;
+  /// System::patch_gradient's marks (one per body) and the bodies whose rows it recomputes.
+  std::vector<char> marks;
+  std::vector<int> affected;
+  /// The pair sums through Verlet lists (System::add_gradient_by_pairs): per list entry (i, j)
+  /// with j > i, the pair's dW/dd / sn and 1 - cs; per entry with j < i, the entry (j, i) that
+  /// holds them (mirror), for the lists of build mirror_builds of term mirror_term.
+  std::vector<Scalar> pair_dw, pair_omc;
+  std::vector<int> mirror;
+  const NeighbourLists* mirror_lists = nullptr;
+  long mirror_builds = -1;
   /// The state's cluster frame C (State::cluster) while the terms are evaluated: external terms
   /// see their centres in the cluster's frame (or, without a centre, world points C x).
   Eigen::Matrix<Scalar, ambient_dimension, ambient_dimension> cluster;
@@ -273,15 +298,18 @@ class System {
     return ambient_dim_of(chart_);
   }
 
+  /// The bodies' kinetic energies on threads, summed in body order (the bits of a plain loop).
   Scalar kinetic_energy(const StateType& s) const {
-    Scalar k(0);
-    Point q(dim()), p(dim());
-    for (int b = 0; b < bodies(); ++b) {
-      q = s.q.col(b);
-      p = s.p.col(b);
-      k += sesi::kinetic_energy(chart_, q, p, mass(b));
-    }
-    return k;
+    std::vector<Scalar> rows(static_cast<std::size_t>(bodies()));
+    parallel::for_chunks(bodies(), parallel::chunks_for(bodies()), [&](int begin, int end, int) {
+      Point q(dim()), p(dim());
+      for (int b = begin; b < end; ++b) {
+        q = s.q.col(b);
+        p = s.p.col(b);
+        rows[static_cast<std::size_t>(b)] = sesi::kinetic_energy(chart_, q, p, mass(b));
+      }
+    });
+    return parallel::sum_in_order(rows);
   }
 
   /// Refresh the per-body trig caches of w from s (charts with HasTrigCache; else nothing).
@@ -302,8 +330,11 @@ class System {
     const int n = bodies();
     const int chunks = parallel::chunks_for(n);
     w.ensure_scratch(chunks, dim(), ambient_dim());
-    if (chunks == 1) {  // few bodies: a plain loop the compiler can inline
-      for (int b = 0; b < n; ++b) f(b, w.scratch.front());
+    if (chunks == 1) {  // few bodies or one thread: a plain loop the compiler can inline
+      const profile::Loop region(parallel::shared_loop(n));  // a parallel region in a profile
+      region.chunk([&] {
+        for (int b = 0; b < n; ++b) f(b, w.scratch.front());
+      });
       return;
     }
     parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
@@ -371,6 +402,7 @@ class System {
   /// them in sync through the level flows, so a kick computes no sine).
   void kick_cached(StateType& s, Scalar h, Workspace& w) const {
     if constexpr (has_potential) {
+      const profile::Scope scope(profile::Phase::force);
       prepare_gradients(s, w);
       for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
         body_gradient(s, w, b, sc);
@@ -382,6 +414,7 @@ class System {
   /// for a stepper that reuses it while q and the frames stay as they are.
   void kick_cached(StateType& s, Scalar h, Workspace& w, typename StateType::Matrix& grad) const {
     if constexpr (has_potential) {
+      const profile::Scope scope(profile::Phase::force);
       prepare_gradients(s, w);
       grad.resize(dim(), bodies());
       for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
@@ -394,6 +427,101 @@ class System {
         }
       });
     }
+  }
+
+  /// After kick_cached(s, h, w, grad), bodies `changed` (ascending) took other chart coordinates
+  /// or frames (a re-charting or a reduction into a topology's domain, which keep the world
+  /// point; or any other change): grad and w's caches are brought to what kick_cached at the new
+  /// s would leave, bit for bit, recomputing only the rows that depend on a changed body -- the
+  /// changed bodies and their partners in the short-range terms' lists at the old points and at
+  /// the new (every other row sees the same points, so a fresh evaluation repeats its bits). s.clustered and s.cluster must be as at the kick. Returns
+  /// false, changing nothing the next kick_cached would not recompute anyway, where every body
+  /// depends on every other (a long-range or chord pair term, or the few-body symmetric pair
+  /// loop) or more than a sixteenth of the bodies changed: the caller then evaluates afresh.
+  bool patch_gradient(const StateType& s, Workspace& w, const std::vector<int>& changed,
+                      typename StateType::Matrix& grad) const {
+    if constexpr (!has_potential || !has_embedded_terms) {
+      static_cast<void>(s);
+      static_cast<void>(w);
+      static_cast<void>(changed);
+      static_cast<void>(grad);
+      return false;
+    } else {
+      const int n = bodies();
+      if (grad.cols() != n || w.X.cols() != n || static_cast<int>(changed.size()) * 16 > n || !rows_only(w)) {
+        return false;
+      }
+      const profile::Scope scope(profile::Phase::force);
+      w.ensure_scratch(1, dim(), ambient_dim());
+      typename Workspace::Scratch& sc = w.scratch.front();
+      // The rows to recompute: the changed bodies and every partner of one, at the old points
+      // (the lists the kick used fit them) and at the new ones (a body may have moved: a user's
+      // change of the state between steps), so that no row keeps a changed body's old share.
+      std::array<const NeighbourLists*, sizeof...(Terms)> lists{};  // each short-range term's
+      w.marks.assign(static_cast<std::size_t>(n), 0);
+      for (const int b : changed) w.marks[static_cast<std::size_t>(b)] = 1;
+      int index = 0;
+      std::apply([&](const auto&... term) { (mark_partners(term, w, changed, index++, lists), ...); }, terms_);
+      // The changed bodies' trig and world points, as refresh and embed_cached compute them.
+      for (const int b : changed) {
+        sc.q = s.q.col(b);
+        if constexpr (HasTrigCache<Chart>) {
+          chart_.refresh(sc.q, w.trig[static_cast<std::size_t>(b)]);
+          chart_.embed(w.trig[static_cast<std::size_t>(b)], sc.x);
+        } else {
+          chart_.embed(sc.q, sc.x);
+        }
+        if (s.framed()) {
+          w.X.col(b).noalias() = s.frames[static_cast<std::size_t>(b)] * sc.x;
+        } else {
+          w.X.col(b) = sc.x;
+        }
+      }
+      index = 0;  // (lists are symmetric: a row that sees b is a row b sees)
+      std::apply([&](const auto&... term) { (mark_partners(term, w, changed, index++, lists), ...); }, terms_);
+      w.affected.clear();
+      for (int b = 0; b < n; ++b) {
+        if (w.marks[static_cast<std::size_t>(b)]) w.affected.push_back(b);
+      }
+      const int count = static_cast<int>(w.affected.size());
+      w.ensure_scratch(parallel::chunks_for(count), dim(), ambient_dim());
+      const auto rows = [&](int begin, int end, int c) {
+        typename Workspace::Scratch& scr = w.scratch[static_cast<std::size_t>(c)];
+        for (int a = begin; a < end; ++a) {
+          const int i = w.affected[static_cast<std::size_t>(a)];
+          w.G.col(i).setZero();
+          int t = 0;
+          std::apply([&](const auto&... term) { (add_row_of(term, w, i, lists[static_cast<std::size_t>(t++)], scr), ...); },
+                     terms_);
+          body_gradient(s, w, i, scr);
+          for (Eigen::Index k = 0; k < scr.p.size(); ++k) grad(k, i) = scr.p(k);
+        }
+      };
+      parallel::for_chunks(count, parallel::chunks_for(count), rows);
+      return true;
+    }
+  }
+
+  /// The Verlet lists of an active short-range pair term whose range is at least reach, brought
+  /// up to date at w.X (the points of w's last evaluation), or null when there is none: every
+  /// pair closer than reach is in them (a close-encounter check needs no index of its own).
+  const NeighbourLists* neighbour_lists(Workspace& w, Scalar reach) const {
+    const NeighbourLists* found = nullptr;
+    if (!by_rows() || w.X.cols() != bodies()) return found;
+    int index = 0;
+    std::apply(
+        [&](const auto&... term) {
+          (([&] {
+             const int k = index++;
+             if constexpr (PairTerm<std::remove_cvref_t<decltype(term)>, Chart> &&
+                           ShortRangeTerm<std::remove_cvref_t<decltype(term)>, Chart>) {
+               if (!found && !inactive(term) && term.range(chart_) >= reach) found = lists_of(term, w, k);
+             }
+           }()),
+           ...);
+        },
+        terms_);
+    return found;
   }
 
   /// Chart gradient dV/dq of all bodies (dim x bodies), for reference methods and tests.
@@ -649,6 +777,67 @@ class System {
     }
   }
 
+  // ---- patch_gradient's parts ----------------------------------------------------------------
+
+  /// Whether every active term's gradient at a body depends only on that body and its partners
+  /// in a short-range term's Verlet lists (patch_gradient's condition). An external term with a
+  /// centre in a cluster frame is left to a fresh evaluation (it would be moved for every row).
+  bool rows_only(const Workspace& w) const {
+    bool ok = by_rows() && pair_search_ == PairSearch::automatic;
+    std::apply([&](const auto&... term) { ((ok = ok && (inactive(term) || row_local(term, w))), ...); }, terms_);
+    return ok;
+  }
+  template <class Term>
+  bool row_local(const Term& term, const Workspace& w) const {
+    if constexpr (PairTerm<Term, Chart>) {
+      static_cast<void>(term);
+      static_cast<void>(w);
+      return ShortRangeTerm<Term, Chart> && HasChordMetric<Chart> && HasPairGeometry<Chart>;
+    } else if constexpr (has_movable_center<Term>) {
+      return !(w.clustered && has_centres_of(term));
+    } else {
+      static_cast<void>(term);
+      static_cast<void>(w);
+      return true;  // the body alone
+    }
+  }
+  /// Marks (w.marks) every partner of a changed body in a short-range term's Verlet lists,
+  /// brought up to date at w.X, and keeps them in lists[index].
+  template <class Term>
+  void mark_partners(const Term& term, Workspace& w, const std::vector<int>& changed, int index,
+                     std::array<const NeighbourLists*, sizeof...(Terms)>& lists) const {
+    if constexpr (PairTerm<Term, Chart> && ShortRangeTerm<Term, Chart> && HasChordMetric<Chart> &&
+                  HasPairGeometry<Chart>) {
+      if (inactive(term)) return;
+      const NeighbourLists* list = lists_of(term, w, index);
+      lists[static_cast<std::size_t>(index)] = list;
+      for (const int b : changed) {
+        for_partners(list, b, /*upper=*/false, [&](int j, int) { w.marks[static_cast<std::size_t>(j)] = 1; });
+      }
+    } else {
+      static_cast<void>(term);
+      static_cast<void>(w);
+      static_cast<void>(changed);
+      static_cast<void>(index);
+      static_cast<void>(lists);
+    }
+  }
+  /// Row i of one term's ambient gradient into w.G.col(i), as add_term_gradient adds it (lists:
+  /// a short-range term's, from mark_partners).
+  template <class Term>
+  void add_row_of(const Term& term, Workspace& w, int i, const NeighbourLists* lists,
+                  typename Workspace::Scratch& sc) const {
+    if (inactive(term)) return;
+    if constexpr (ChartTerm<Term, Chart>) {
+      static_cast<void>(lists);  // (body_gradient adds it)
+    } else if constexpr (PairTerm<Term, Chart>) {
+      if constexpr (ShortRangeTerm<Term, Chart>) add_row_gradient(term, w, lists, reach2_of(term), i, sc);
+    } else {
+      static_cast<void>(lists);
+      add_external_gradient(term, w, i, sc, w.clustered);  // (no centre here: rows_only)
+    }
+  }
+
   // ---- pair sums by rows (bodies >= rows_from) ----------------------------------------------
 
   template <class Term>
@@ -676,8 +865,9 @@ class System {
   const NeighbourLists* lists_of(const Term& term, Workspace& w, int index) const {
     if constexpr (ShortRangeTerm<Term, Chart> && HasChordMetric<Chart> && HasPairGeometry<Chart>) {
       if (pair_search_ == PairSearch::automatic) {
-        if (static_cast<int>(w.verlet.size()) <= index) w.verlet.resize(static_cast<std::size_t>(index) + 1);
-        VerletList<Chart>& list = w.verlet[static_cast<std::size_t>(index)];
+        std::vector<VerletList<Chart>>& store = w.lists();
+        if (static_cast<int>(store.size()) <= index) store.resize(static_cast<std::size_t>(index) + 1);
+        VerletList<Chart>& list = store[static_cast<std::size_t>(index)];
         list.skin_fraction = neighbour_skin_;
         return &list.update(chart_, w.X, term.range(chart_));
       }
@@ -779,13 +969,7 @@ class System {
         // d distance / dx = G (x - y - (1 - cs) x) / sn, and the same with x, y swapped: the
         // tangent gradients of Sphere's and Hyperbolic's distance_gradient, with no
         // transcendental function. dw is dW/dd / sn.
-        if constexpr (requires { term.derivative_over_sn(chart_, g, mi, mj); }) {
-          dw = term.derivative_over_sn(chart_, g, mi, mj);
-        } else if constexpr (AlgebraicPairTerm<Term, Chart>) {
-          dw = term.derivative(chart_, g, mi, mj) / g.sn;
-        } else {
-          dw = term.derivative(chart_, chart_.distance_of(g), mi, mj) / g.sn;
-        }
+        dw = derivative_over_sn(term, g, mi, mj);
         if (dw == Scalar(0)) return;  // beyond a cutoff
         if constexpr (Both) sc.h = -sc.g - g.one_minus_cs * sc.y;
         sc.g -= g.one_minus_cs * sc.x;
@@ -814,6 +998,117 @@ class System {
         }
       }
     }
+  }
+
+  /// dW/dd / sn of a pair term of the geodesic distance on its pair geometry g.
+  template <class Term>
+  SESI_INLINE Scalar derivative_over_sn(const Term& term, const PairGeometry<Scalar>& g, Scalar mi, Scalar mj) const {
+    if constexpr (requires { term.derivative_over_sn(chart_, g, mi, mj); }) {
+      return term.derivative_over_sn(chart_, g, mi, mj);
+    } else if constexpr (AlgebraicPairTerm<Term, Chart>) {
+      return term.derivative(chart_, g, mi, mj) / g.sn;
+    } else {
+      return term.derivative(chart_, chart_.distance_of(g), mi, mj) / g.sn;
+    }
+  }
+  /// The rows of the many-body step: a term of the geodesic distance through a Verlet list, on
+  /// a fixed-size space with pair_geometry off a quotient. The same arithmetic as
+  /// add_pair_gradient<false>, in local vectors the compiler keeps in registers (through the
+  /// scratch's members each partner was stored and read back).
+  template <class Term>
+  static constexpr bool fast_rows = !on_quotient && ambient_dimension != Eigen::Dynamic && HasPairGeometry<Chart> &&
+                                    !is_chord_term<Term> && PairTerm<Term, Chart>;
+  template <class Term>
+  AmbientVectorOf fast_row(const Term& term, const Workspace& w, const NeighbourLists& lists, Scalar reach2,
+                           int i) const {
+    const AmbientVectorOf x = w.X.col(i);
+    AmbientVectorOf acc = AmbientVectorOf::Zero();
+    const Scalar mi = mass(i);
+    const int* last = lists.index.data() + lists.end(i);
+    for (const int* j = lists.index.data() + lists.begin(i); j != last; ++j) {
+      const AmbientVectorOf y = w.X.col(*j);
+      const PairGeometry<Scalar> g = chart_.pair_geometry(x, y);
+      if (g.chord2 >= reach2) continue;  // (a NaN chord goes on, and stays NaN)
+      const Scalar dw = derivative_over_sn(term, g, mi, mass(*j));
+      if (dw == Scalar(0)) continue;  // beyond a cutoff
+      AmbientVectorOf u = x - y;
+      u -= g.one_minus_cs * x;
+      if constexpr (requires { chart_.lower(u); }) chart_.lower(u);
+      acc += dw * u;
+    }
+    return acc;
+  }
+
+  /// Room for m entries and a quarter more, so that a list rebuilt with a few more pairs does not
+  /// make a step allocate.
+  template <class V>
+  static void reserve_with_slack(V& v, std::size_t m) {
+    if (v.capacity() < m) v.reserve(m + m / 4);
+  }
+  /// The many-body gradient through Verlet lists, each pair's costly part once (Newton's third
+  /// law, as LAMMPS' half lists) with the rows' sums as add_row_gradient forms them, bit for bit:
+  /// first, on threads by rows, every pair i < j of the lists gets dw = dW/dd / sn and 1 - cs
+  /// (symmetric in i and j to the bit: |x - y| = |y - x|, |x + y| = |y + x|, and the term is a
+  /// function of the pair); then each row i sums dw ((x_i - x_j) - (1 - cs) x_i) over its partners
+  /// in ascending order, reading a pair j < i where row j stored it (the mirror entry).
+  template <class Term>
+  void add_gradient_by_pairs(const Term& term, Workspace& w, const NeighbourLists& lists, long builds,
+                             Scalar reach2) const {
+    if (w.mirror_lists != &lists || w.mirror_builds != builds) {
+      // Rows are sorted: entry (j, i) is found by bisection in row j.
+      reserve_with_slack(w.mirror, lists.index.size());
+      w.mirror.resize(lists.index.size());
+      for_bodies(w, [&](int i, typename Workspace::Scratch&) {
+        for (int e = lists.begin(i); e < lists.end(i); ++e) {
+          const int j = lists.index[static_cast<std::size_t>(e)];
+          if (j > i) break;
+          const int* first = lists.index.data() + lists.begin(j);
+          const int* at = std::lower_bound(first, lists.index.data() + lists.end(j), i);
+          w.mirror[static_cast<std::size_t>(e)] = static_cast<int>(at - lists.index.data());
+        }
+      });
+      w.mirror_lists = &lists;
+      w.mirror_builds = builds;
+    }
+    reserve_with_slack(w.pair_dw, lists.index.size());
+    reserve_with_slack(w.pair_omc, lists.index.size());
+    w.pair_dw.resize(lists.index.size());
+    w.pair_omc.resize(lists.index.size());
+    for_bodies(w, [&](int i, typename Workspace::Scratch&) { pairs_of_row(term, w, lists, reach2, i); });
+    for_bodies(w, [&](int i, typename Workspace::Scratch&) { sum_of_row(w, lists, i); });
+  }
+  /// add_gradient_by_pairs' first pass on row i: its pairs i < j.
+  template <class Term>
+  SESI_FLATTEN void pairs_of_row(const Term& term, Workspace& w, const NeighbourLists& lists, Scalar reach2,
+                                 int i) const {
+    const AmbientVectorOf x = w.X.col(i);
+    const Scalar mi = mass(i);
+    for (int e = lists.end(i) - 1; e >= lists.begin(i); --e) {
+      const int j = lists.index[static_cast<std::size_t>(e)];
+      if (j < i) break;
+      const AmbientVectorOf y = w.X.col(j);
+      const PairGeometry<Scalar> g = chart_.pair_geometry(x, y);
+      // Beyond the reach: no force (a NaN chord goes on, and stays NaN).
+      w.pair_dw[static_cast<std::size_t>(e)] = g.chord2 >= reach2 ? Scalar(0) : derivative_over_sn(term, g, mi, mass(j));
+      w.pair_omc[static_cast<std::size_t>(e)] = g.one_minus_cs;
+    }
+  }
+  /// add_gradient_by_pairs' second pass on row i: the row's sum into w.G.col(i).
+  SESI_FLATTEN void sum_of_row(Workspace& w, const NeighbourLists& lists, int i) const {
+    const AmbientVectorOf x = w.X.col(i);
+    AmbientVectorOf acc = AmbientVectorOf::Zero();
+    for (int e = lists.begin(i); e < lists.end(i); ++e) {
+      const int j = lists.index[static_cast<std::size_t>(e)];
+      const std::size_t slot = static_cast<std::size_t>(j > i ? e : w.mirror[static_cast<std::size_t>(e)]);
+      const Scalar dw = w.pair_dw[slot];
+      if (dw == Scalar(0)) continue;  // beyond a cutoff
+      const AmbientVectorOf y = w.X.col(j);
+      AmbientVectorOf u = x - y;
+      u -= w.pair_omc[slot] * x;
+      if constexpr (requires { chart_.lower(u); }) chart_.lower(u);
+      acc += dw * u;
+    }
+    w.G.col(i) += acc;
   }
 
   // ---- long-range pair sums by tiles (bodies >= rows_from) ------------------------------------
@@ -1001,16 +1296,13 @@ class System {
         }
         const NeighbourLists* lists = lists_of(term, w, index);
         const Scalar reach2 = reach2_of(term);
-        for_bodies(w, [&](int i, typename Workspace::Scratch& sc) {
-          sc.x = w.X.col(i);
-          sc.acc.setZero();
-          for_partners(lists, i, /*upper=*/false, [&](int j, int k) {
-            sc.y = w.X.col(j);
-            to_image(sc, k);
-            add_pair_gradient<false>(term, sc, i, j, reach2, sc.acc, sc.acc);
-          });
-          w.G.col(i) += sc.acc;
-        });
+        if constexpr (fast_rows<Term>) {
+          if (lists) {
+            add_gradient_by_pairs(term, w, *lists, w.lists()[static_cast<std::size_t>(index)].builds(), reach2);
+            return;
+          }
+        }
+        for_bodies(w, [&](int i, typename Workspace::Scratch& sc) { add_row_gradient(term, w, lists, reach2, i, sc); });
         return;
       }
       for (int i = 0; i < bodies(); ++i) {
@@ -1040,29 +1332,50 @@ class System {
       }
     } else {
       static_cast<void>(index);
-      if (w.clustered) {
-        if constexpr (has_movable_center<Term>) {
+      if constexpr (has_movable_center<Term>) {
+        if (w.clustered) {
           const Term local = localized(term, w);
-          for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
-            sc.x = w.X.col(b);
-            local.gradient(chart_, sc.x, mass(b), sc.g);
-            w.G.col(b) += sc.g;
-          });
-        } else {
-          // d V(C x) / dx = C^T (dV/dx)(C x): the chain rule through the cluster frame.
-          for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
-            sc.y.noalias() = w.cluster * w.X.col(b);
-            term.gradient(chart_, sc.y, mass(b), sc.g);
-            w.G.col(b).noalias() += w.cluster.transpose() * sc.g;
-          });
+          for_bodies(w, [&](int b, typename Workspace::Scratch& sc) { add_external_gradient(local, w, b, sc, false); });
+          return;
         }
+      }
+      for_bodies(w, [&](int b, typename Workspace::Scratch& sc) { add_external_gradient(term, w, b, sc, w.clustered); });
+    }
+  }
+  /// w.G.col(i) += row i of a pair term's gradient by rows: dW(i, j)/dx_i summed over the
+  /// partners j in ascending order (its list, or all bodies), into one accumulator first.
+  template <class Term>
+  void add_row_gradient(const Term& term, Workspace& w, const NeighbourLists* lists, Scalar reach2, int i,
+                        typename Workspace::Scratch& sc) const {
+    if constexpr (fast_rows<Term>) {
+      if (lists) {
+        w.G.col(i) += fast_row(term, w, *lists, reach2, i);
         return;
       }
-      for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
-        sc.x = w.X.col(b);
-        term.gradient(chart_, sc.x, mass(b), sc.g);
-        w.G.col(b) += sc.g;
-      });
+    }
+    sc.x = w.X.col(i);
+    sc.acc.setZero();
+    for_partners(lists, i, /*upper=*/false, [&](int j, int k) {
+      sc.y = w.X.col(j);
+      to_image(sc, k);
+      add_pair_gradient<false>(term, sc, i, j, reach2, sc.acc, sc.acc);
+    });
+    w.G.col(i) += sc.acc;
+  }
+  /// w.G.col(b) += an external term's gradient at body b: term as given (a term already moved
+  /// into the cluster frame, or no cluster frame), or with world, a term without a centre seeing
+  /// the world point C x: d V(C x) / dx = C^T (dV/dx)(C x), the chain rule through the frame.
+  template <class Term>
+  void add_external_gradient(const Term& term, Workspace& w, int b, typename Workspace::Scratch& sc,
+                             bool world) const {
+    if (world) {
+      sc.y.noalias() = w.cluster * w.X.col(b);
+      term.gradient(chart_, sc.y, mass(b), sc.g);
+      w.G.col(b).noalias() += w.cluster.transpose() * sc.g;
+    } else {
+      sc.x = w.X.col(b);
+      term.gradient(chart_, sc.x, mass(b), sc.g);
+      w.G.col(b) += sc.g;
     }
   }
 

@@ -195,6 +195,9 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
   b->add_flag("--box", o.box,
               "--scaling on E^n: the bodies in a periodic box at the same density (issue #26), with LAMMPS "
               "(lmp, mpirun -np THREADS) on the same bodies when it is installed; the ratios printed.");
+  b->add_flag("--no-lammps", o.no_lammps,
+              "--scaling: leave out the LAMMPS rows (made with --box, and on --space sphere --dim 2 or 3, "
+              "where LAMMPS runs the E^n box at the same N and density; issue #27).");
   b->add_option("--genus", o.genera,
                 "--scaling on H^2: comma-separated genera of compact surfaces holding the N bodies at the same "
                 "density (R = (N / (4 pi (g - 1) rho))^(1/2)), with the E^2 box at the same N; ratios printed.")
@@ -216,7 +219,9 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
       "With --scaling: DIR/scaling.csv (default DIR sesi-out/bench/scaling), one row per point:\n"
       "n_bodies, space, dim, potential, method, threads, seconds_per_step, pairs_per_step,\n"
       "ns_per_pair, peak_rss_mb; rows 'euclidean 3' (sesi on flat E^3, same N and density) and\n"
-      "'flat-periodic' (a plain 3-D cell-list loop) are the references. --methods takes sesi run's\n"
+      "'flat-periodic' (a plain 3-D cell-list loop) are the references; on S^2 and S^3 (and with\n"
+      "--box) rows 'lammps' time LAMMPS on the E^n box at the same N and density when lmp is on\n"
+      "PATH (--no-lammps: not). --methods takes sesi run's\n"
       "methods there (default sesi2). Plot: /usr/bin/python3 tools/plot_scaling.py DIR.\n";
   b->footer(footer);
   return b;
@@ -551,6 +556,7 @@ int bench_command(const BenchOptions& o) {
   if (!o.levels.empty() && o.horizons.empty()) throw InputError("--levels: only with --horizons");
   if ((!o.dts.empty() || !o.tols.empty()) && (o.scaling || !o.figure.empty()))
     throw InputError(std::string(o.dts.empty() ? "--tols" : "--dts") + ": not with --scaling or --figure");
+  if (o.no_lammps && !o.scaling) throw InputError("--no-lammps: only with --scaling");
   if (o.scaling) return bench::scaling_command(o);
   bench::Settings s;
   s.quick = o.quick;

@@ -42,6 +42,7 @@ struct BenchOptions {
   long check_every = 0;                    ///< the runs' check cadence (0: sesi run's default)
   double skin = sesi::default_skin_fraction;  ///< the runs' neighbour_skin
   bool box = false;                        ///< E^n in a periodic box, with LAMMPS rows (issue #26)
+  bool no_lammps = false;                  ///< leave out the LAMMPS rows (--box; S^2, S^3: issue #27)
   std::string genera;                      ///< H^2: comma-separated genera of compact surfaces (empty: none)
 };
 

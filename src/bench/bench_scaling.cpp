@@ -11,10 +11,10 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <sesi/parallel.hpp>
@@ -273,6 +273,9 @@ void print_summary(const std::vector<Row>& rows) {
         const bool same = q.method == r.method && q.m.threads == r.m.threads;
         if (q.space == "lammps" && r.topology == "box" && q.dim == r.dim && q.m.threads == r.m.threads) {
           std::printf("  / LAMMPS (%d ranks) %.2f", q.m.threads, r.m.seconds_per_step / q.m.seconds_per_step);
+        } else if (q.space == "lammps" && r.space == "sphere" && q.dim == r.dim && q.m.threads == r.m.threads) {
+          // issue #27: sesi on S^n against LAMMPS on the E^n box at the same N and density.
+          std::printf("  / LAMMPS E^%d (%d ranks) %.2f", q.dim, q.m.threads, r.m.seconds_per_step / q.m.seconds_per_step);
         } else if (r.topology.starts_with("genus") && q.topology == "box" && q.dim == 2 && same) {
           std::printf("  / E^2 box %.2f", r.m.seconds_per_step / q.m.seconds_per_step);
         } else if (r.topology.starts_with("genus") && r.topology != "genus 2" && q.topology == "genus 2" && same) {
@@ -297,7 +300,7 @@ void print_summary(const std::vector<Row>& rows) {
     std::printf("\n");
   }
   bool topology = false;
-  for (const Row& r : rows) topology = topology || !r.topology.empty();
+  for (const Row& r : rows) topology = topology || (!r.topology.empty() && r.space != "lammps");  // not S^n's LAMMPS rows
   if (!topology) return;
   std::printf("\nseconds per body-step (seconds per step / N):\n");
   for (const Row& r : rows) {
@@ -370,6 +373,11 @@ int scaling_command(const BenchOptions& o) {
   const bool lj = base.potential == "lennard-jones";
   if (o.steps < 0) throw InputError("--steps: must be > 0");
   const long warm = lj ? 20 : 1;
+  // LAMMPS rows: with --box on the same bodies (issue #26); on S^2 and S^3 on the E^n box at the
+  // same N and density, the flat system a LAMMPS user would run (issue #27).
+  const bool sphere_lammps = lj && !topology && base.space == SpaceKind::sphere && (base.dim == 2 || base.dim == 3);
+  const bool lammps = !o.no_lammps && (o.box || sphere_lammps);
+  std::set<std::string> lammps_reported;  // each reason for leaving LAMMPS rows out, printed once
 
   const std::filesystem::path dir = o.out.empty() ? "sesi-out/bench/scaling" : o.out;
   std::filesystem::create_directories(dir);
@@ -390,6 +398,13 @@ int scaling_command(const BenchOptions& o) {
                       "density; lammps rows: LAMMPS (lmp, mpirun -np threads) on the box's bodies, its own Loop time per "
                       "step (peak_rss_mb not measured)\n");
   }
+  if (lammps && sphere_lammps) {
+    std::fprintf(csv, "# lammps rows (issue #27): LAMMPS (lmp; mpirun -np threads) on a periodic box of E^%d with the "
+                      "same N and density 1/2 (the bodies of --box), the same Lennard-Jones (cutoff 2.5, shifted), skin "
+                      "(cutoff x neighbour_skin), dt and velocity Verlet; its own Loop time per step (peak_rss_mb not "
+                      "measured); the summary prints sesi S^%d / LAMMPS E^%d at the same N and threads = ranks\n",
+                 base.dim, base.dim, base.dim);
+  }
   if (rounds > 1) {
     std::fprintf(csv, "# seconds_per_step and peak_rss_mb: minimum over %d rounds, each round timing every point of an N "
                  "once in turn\n", rounds);
@@ -405,6 +420,7 @@ int scaling_command(const BenchOptions& o) {
                     "center_distance,topology\n");
 
   std::printf("sesi bench --scaling: %s, dim %d, %s\n", o.space.c_str(), base.dim, base.potential.c_str());
+  if (o.no_lammps && (o.box || sphere_lammps)) std::printf("  LAMMPS rows left out: --no-lammps\n");
   std::vector<Row> rows;
   const bool flat3 = base.space == SpaceKind::euclidean && base.dim == 3;
   for (const long n : sizes) {
@@ -419,7 +435,7 @@ int scaling_command(const BenchOptions& o) {
       ScalingPoint scene;  ///< unused for the flat cell-list loop
       int threads;         ///< asked for (0: all cores)
       std::string thermostat = {};  ///< "" (NVE) or a kind of timed_thermostats
-      bool dropped = false;         ///< a LAMMPS row without LAMMPS
+      bool dropped = false;         ///< a LAMMPS row without LAMMPS (or whose run failed)
     };
     std::vector<Point> points;
     for (const std::string& method : methods) {
@@ -486,10 +502,17 @@ int scaling_command(const BenchOptions& o) {
         }
       }
     }
-    if (o.box) {
-      // LAMMPS on the same bodies, as many MPI ranks as sesi's threads (issue #26).
+    if (lj && !topology) {
+      points.push_back({{static_cast<int>(n), "flat-periodic", 3, "lennard-jones", "velocity-verlet",
+                         Measured{}, 1, 0},
+                        ScalingPoint{}, 1});
+    }
+    if (lammps) {
+      // LAMMPS on the E^n box of these N bodies (with --box the very bodies of the sesi rows), as
+      // many MPI ranks as sesi's threads; sesi's skin, dt and Lennard-Jones (lammps_seconds_per_step).
       for (const long t : threads) {
         ScalingPoint point = base;
+        point.space = SpaceKind::euclidean;
         point.bodies = static_cast<int>(n);
         point.neighbour_skin = o.skin;
         point.box = true;
@@ -497,28 +520,41 @@ int scaling_command(const BenchOptions& o) {
                            "box"},
                           point, static_cast<int>(t)});
       }
-    } else if (lj && !topology) {
-      points.push_back({{static_cast<int>(n), "flat-periodic", 3, "lennard-jones", "velocity-verlet",
-                         Measured{}, 1, 0},
-                        ScalingPoint{}, 1});
     }
     for (int round = 0; round < rounds; ++round) {
       for (Point& p : points) {
         if (p.dropped) continue;
         if (p.row.space == "lammps") {
-          const Scene scene = scaling_scene(p.scene);
-          const int ranks = p.threads > 0 ? p.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-          std::string why;
-          const std::optional<double> seconds = lammps_seconds_per_step(scene, ranks, warm, steps, why);
-          if (!seconds) {
-            std::printf("  no LAMMPS row: %s\n", why.c_str());
+          // Threads 0 (all cores): as many ranks as the sesi rows' threads (sesi's default count;
+          // this process never sets it).
+          const int ranks = p.threads > 0 ? p.threads : std::max(1, sesi::parallel::threads());
+          const std::string missing = lammps_unavailable(ranks);
+          if (!missing.empty()) {
+            if (lammps_reported.insert(missing).second) std::printf("  LAMMPS rows left out: %s\n", missing.c_str());
             p.dropped = true;
             continue;
           }
+          // In a child process, as the sesi points: the box's scene is not left in this
+          // process's memory, which the later points' children would count as theirs.
           Measured m;
-          m.seconds_per_step = *seconds;
-          m.threads = ranks;
-          m.pairs = pairs_within(scene, lj_cutoff);
+          try {
+            m = in_child([&] {
+              const Scene scene = scaling_scene(p.scene);
+              std::string why;
+              const std::optional<double> seconds = lammps_seconds_per_step(scene, ranks, warm, steps, why);
+              if (!seconds) throw std::runtime_error(why);
+              Measured out;
+              out.seconds_per_step = *seconds;
+              out.threads = ranks;
+              out.pairs = pairs_within(scene, lj_cutoff);
+              return out;
+            });
+          } catch (const std::runtime_error& e) {
+            std::printf("  no LAMMPS row at %d bodies, %d ranks: %s\n", p.row.bodies, ranks, e.what());
+            p.dropped = true;
+            continue;
+          }
+          m.peak_rss_mb = 0;  // that of the child, not of LAMMPS: not measured
           if (round == 0 || m.seconds_per_step < p.row.m.seconds_per_step) p.row.m = m;
           continue;
         }

@@ -4,7 +4,8 @@
 /// loop (default checks and cadence) against the number of bodies, with, in the same run, the
 /// same bodies on flat E^3 through sesi's Euclidean path and a plain flat 3-D Lennard-Jones
 /// cell-list loop, so that every figure can be read as a ratio; with --box (E^n) LAMMPS on the
-/// same bodies, with --genus (H^2) the compact surfaces and the E^2 box at the same N (issue
+/// same bodies, on S^2 and S^3 LAMMPS on the E^n box at the same N and density (issue #27; not
+/// with --no-lammps), with --genus (H^2) the compact surfaces and the E^2 box at the same N (issue
 /// #26). Each point runs in a child process, so that its peak resident memory is its own.
 /// Writes DIR/scaling.csv.
 

@@ -567,17 +567,21 @@ std::string on_path(const std::string& name) {
 
 }  // namespace
 
+std::string lammps_unavailable(int ranks) {
+  if (on_path("lmp").empty()) return "no LAMMPS program lmp on PATH (Debian: lammps)";
+  if (ranks > 1 && on_path("mpirun").empty()) return "no mpirun on PATH (Debian: openmpi-bin)";
+  return {};
+}
+
 std::optional<double> lammps_seconds_per_step(const Scene& scene, int ranks, long warm, long steps, std::string& why) {
   const int dim = scene.space.dim;
   if (scene.space.kind != SpaceKind::euclidean || scene.space.box.empty() || (dim != 2 && dim != 3)) {
     why = "LAMMPS rows need a periodic box of E^2 or E^3";
     return std::nullopt;
   }
+  why = lammps_unavailable(ranks);
+  if (!why.empty()) return std::nullopt;
   const std::string lmp = on_path("lmp"), mpirun = ranks > 1 ? on_path("mpirun") : std::string();
-  if (lmp.empty() || (ranks > 1 && mpirun.empty())) {
-    why = lmp.empty() ? "no LAMMPS program lmp on PATH (Debian: lammps)" : "no mpirun on PATH (Debian: openmpi-bin)";
-    return std::nullopt;
-  }
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("sesi-scaling-lammps-" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);

@@ -67,6 +67,9 @@ double flat_cell_list_seconds_per_step(int bodies, long steps, long& pairs);
 /// step: LAMMPS' own "Loop time" of a run of `steps` steps after a run of `warm` steps, with
 /// thermo output only at the ends. Returns nothing, with `why` set, when lmp (or mpirun) is not
 /// found or the run fails.
+/// Why LAMMPS cannot run on `ranks` ranks here ("" when it can): lmp, or for ranks > 1 mpirun, not
+/// on PATH.
+std::string lammps_unavailable(int ranks);
 std::optional<double> lammps_seconds_per_step(const Scene& scene, int ranks, long warm, long steps, std::string& why);
 
 }  // namespace sesi::program::bench

@@ -148,6 +148,8 @@ int main(int argc, char** argv) {
                                    "[thermostat] table.")
                        ->type_name("N");
   run->add_flag("--quiet,-q", options.quiet, "No report on stdout and no progress bar.");
+  run->add_flag("--profile", options.profile,
+                "Time the steps' phases per thread: DIR/profile.csv, and a table on stderr (results unchanged).");
   bool list_methods = false, list_json = false;
   auto* list_opt = run->add_flag("--list-methods", list_methods,
                                  "Print the methods, one name per line, and run nothing.");
@@ -170,6 +172,8 @@ int main(int argc, char** argv) {
       resume->add_option("--threads,-j", resume_threads, "Threads, >= 0 (0: all cores; results do not depend on it).")
           ->type_name("N");
   resume->add_flag("--quiet,-q", resume_options.quiet, "No report on stdout and no progress bar.");
+  resume->add_flag("--profile", resume_options.profile,
+                   "Time the resumed steps' phases per thread: DIR/profile.csv, and a table on stderr.");
   BenchOptions bench_options;
   CLI::App* bench = add_bench_subcommand(app, bench_options);
   SweepOptions sweep_options;

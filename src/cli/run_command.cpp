@@ -5,8 +5,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 #include <sesi/parallel.hpp>
 
@@ -201,9 +205,79 @@ void print_report(const Scene& scene, const Recorder& recorder, const RunOutcome
 }
 
 
+/// profile.csv (docs/benchmarks.md, "Profile of a step"): per phase a row of totals (thread
+/// "all") and a row per thread of its busy time in sesi::parallel's loops, then the same for the
+/// whole step (phase "step"); '#' lines first say what each column means.
+std::string profile_csv(const sesi::profile::Report& r, const Scene& scene) {
+  using sesi::profile::Phase;
+  std::string text;
+  char line[512];
+  const auto add = [&](const char* format, auto... values) {
+    std::snprintf(line, sizeof line, format, values...);
+    text += line;
+  };
+  add("# sesi profile of a run's steps (sesi run --profile): scene %s, %d bodies, %d threads, %ld steps\n",
+      scene.name.c_str(), scene.body_count(), r.threads, r.steps);
+  text +=
+      "# phase: a part of the step; other = step time inside no other phase; step = the whole window (the "
+      "steps, from the first to the last; a resumed run's own steps only)\n"
+      "# thread: all = the phase's totals; 0..T-1 = that thread's part (0 the thread that runs the steps)\n"
+      "# calls: times the phase was entered (thread all; steps for phase step), chunks of parallel loops run "
+      "(thread k)\n"
+      "# wall_seconds: wall time in the phase on the stepping thread, inner phases excluded (they add up to "
+      "step)\n"
+      "# loop_seconds: wall time of the sesi::parallel loops inside it (on the stepping thread)\n"
+      "# busy_seconds: time threads spent running those loops' chunks (thread all: summed over threads)\n"
+      "# serial_seconds: wall_seconds - loop_seconds, the work no other thread can share (Amdahl's serial part)\n"
+      "# share: wall_seconds / the step's wall_seconds\n";
+  const double serial = r.serial();
+  add("# serial fraction: %.6f (serial_seconds / wall_seconds of phase step)\n", r.serial_fraction());
+  text += "phase,thread,calls,wall_seconds,loop_seconds,busy_seconds,serial_seconds,share\n";
+  double loops = 0.0;
+  std::vector<double> busy(static_cast<std::size_t>(r.threads), 0.0);
+  std::vector<long long> chunks(static_cast<std::size_t>(r.threads), 0);
+  for (int k = 0; k < sesi::profile::phase_count; ++k) {
+    const sesi::profile::PhaseTotals& p = r.phases[k];
+    double all = 0.0;
+    for (int t = 0; t < r.threads; ++t) {
+      all += p.busy[t];
+      busy[t] += p.busy[t];
+      chunks[t] += p.chunks[t];
+    }
+    loops += p.loop_wall;
+    add("%s,all,%lld,%.9f,%.9f,%.9f,%.9f,%.6f\n", sesi::profile::name(static_cast<Phase>(k)), p.calls, p.wall,
+        p.loop_wall, all, p.serial, r.wall > 0 ? p.wall / r.wall : 0.0);
+    for (int t = 0; t < r.threads; ++t) {
+      add("%s,%d,%lld,,,%.9f,,\n", sesi::profile::name(static_cast<Phase>(k)), t, p.chunks[t], p.busy[t]);
+    }
+  }
+  double all = 0.0;
+  for (const double b : busy) all += b;
+  add("step,all,%ld,%.9f,%.9f,%.9f,%.9f,%.6f\n", r.steps, r.wall, loops, all, serial, r.wall > 0 ? 1.0 : 0.0);
+  for (int t = 0; t < r.threads; ++t) add("step,%d,%lld,,,%.9f,,\n", t, chunks[t], busy[t]);
+  return text;
+}
+
+/// The profile's short table on stderr: the phases that took time, and the serial fraction.
+void print_profile(const sesi::profile::Report& r, const Scene& scene, const std::filesystem::path& csv) {
+  using sesi::profile::Phase;
+  std::fprintf(stderr, "sesi: profile of %ld steps, %d bodies, %d threads (%s):\n", r.steps, scene.body_count(),
+               r.threads, csv.string().c_str());
+  std::fprintf(stderr, "  %-11s %12s %8s %12s\n", "phase", "wall s", "% step", "serial s");
+  for (int k = 0; k < sesi::profile::phase_count; ++k) {
+    const sesi::profile::PhaseTotals& p = r.phases[k];
+    if (p.wall <= 0.0) continue;
+    std::fprintf(stderr, "  %-11s %12.6f %7.2f%% %12.6f\n", sesi::profile::name(static_cast<Phase>(k)), p.wall,
+                 r.wall > 0 ? 100.0 * p.wall / r.wall : 0.0, p.serial);
+  }
+  std::fprintf(stderr, "  %-11s %12.6f %7.2f%% %12.6f\n", "step", r.wall, r.wall > 0 ? 100.0 : 0.0, r.serial());
+  std::fprintf(stderr, "  serial fraction %.2f%% (time outside parallel loops / step time)\n",
+               100.0 * r.serial_fraction());
+}
+
 /// The run of scene into staging, from its start or from a checkpoint (in from_dir): outputs,
 /// checkpoints, publishing and the closing report. Returns the exit status.
-int execute(const Scene& scene, StagingDir& staging, bool quiet, const Checkpoint* from = nullptr,
+int execute(const Scene& scene, StagingDir& staging, bool quiet, bool profile, const Checkpoint* from = nullptr,
             const std::filesystem::path& from_dir = {}) {
   const bool euclidean = scene.space.kind == SpaceKind::euclidean;
   const int ambient = euclidean ? scene.dim() : scene.dim() + 1;
@@ -226,7 +300,8 @@ int execute(const Scene& scene, StagingDir& staging, bool quiet, const Checkpoin
   };
   const auto start = std::chrono::steady_clock::now();
   const RunOutcome outcome =
-      run_loop(scene, *integrator, *recorder, RunControl{&signals::stop_requested(), &progress, {}, checkpoint}, from);
+      run_loop(scene, *integrator, *recorder,
+               RunControl{&signals::stop_requested(), &progress, {}, checkpoint, profile}, from);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   // A resumed run that took no checkpoint of its own (one resumed at its end, or stopped before
   // its next) keeps the one it went on from, with the settings now in force: the outputs never
@@ -234,7 +309,9 @@ int execute(const Scene& scene, StagingDir& staging, bool quiet, const Checkpoin
   if (from && checkpoint_step < 0) checkpoint(*from);
   progress.finish();
   recorder->finish(outcome, wall);
+  if (outcome.profile) write_file_atomically(staging.path() / "profile.csv", profile_csv(*outcome.profile, scene));
   const std::filesystem::path dir = staging.publish(outcome.complete());
+  if (outcome.profile) print_profile(*outcome.profile, scene, dir / "profile.csv");
 
   // A stopped run's checkpoint is at the step it stopped after (run_loop): one step number.
   const std::string kept =
@@ -345,7 +422,7 @@ int run_command(const RunOptions& options) {
       options.out.empty() ? std::filesystem::path("sesi-out") / scene.name : std::filesystem::path(options.out);
   signals::begin_run();  // from here a signal stops the run between steps, with a checkpoint
   StagingDir staging(target, options.out.empty() ? "output directory" : "--out");
-  return execute(scene, staging, options.quiet);
+  return execute(scene, staging, options.quiet, options.profile);
 }
 
 int resume_command(const ResumeOptions& options) {
@@ -374,7 +451,7 @@ int resume_command(const ResumeOptions& options) {
   const std::filesystem::path target = resume_target(source);
   const bool beside = source.parent_path() == target.parent_path() || source.parent_path() == target;
   StagingDir staging(target, "sesi resume", beside ? source : std::filesystem::path());
-  const int status = execute(scene, staging, options.quiet, &checkpoint, source);
+  const int status = execute(scene, staging, options.quiet, options.profile, &checkpoint, source);
   // A killed run's staging directory or DIR.incomplete, now gone on from into DIR.
   if (status == exit_ok && source != staging.target()) remove_superseded(source);
   return status;

@@ -28,6 +28,7 @@ struct RunOptions {
   std::optional<double> temperature;
   std::optional<std::string> seed;  ///< as given: an integer from 0 to 2^63 - 1 (checked here)
   bool quiet = false;
+  bool profile = false;  ///< --profile: DIR/profile.csv and a table on stderr (sesi::profile)
 };
 
 int run_command(const RunOptions& options);
@@ -39,6 +40,7 @@ struct ResumeOptions {
   std::optional<double> t_end;
   std::optional<long> threads;
   bool quiet = false;
+  bool profile = false;  ///< --profile: the resumed steps' profile (DIR/profile.csv)
 };
 
 int resume_command(const ResumeOptions& options);

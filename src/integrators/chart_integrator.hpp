@@ -5,6 +5,7 @@
 /// [thermostat]: thermostat_stepper.hpp), and the diagnostics of the framed state.
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -117,6 +118,8 @@ class ChartIntegrator final : public Integrator {
       dt_ = scene.integrator.dt.value_or(0.0);
       initial_ = x_;
     }
+    // The diagnostics evaluate where the step's last kick did: one set of Verlet lists serves both.
+    w_.share_lists(stepper_->workspace());
   }
   ChartIntegrator(const ChartIntegrator&) = delete;
   ChartIntegrator& operator=(const ChartIntegrator&) = delete;
@@ -159,10 +162,19 @@ class ChartIntegrator final : public Integrator {
   }
 
   int first_non_finite_body() const override {
-    for (int b = 0; b < x_.bodies(); ++b) {
-      if (!x_.q.col(b).allFinite() || !x_.p.col(b).allFinite()) return b + 1;
-    }
-    return 0;
+    // After every step: on threads, each chunk stopping at its first bad body; the least wins.
+    const int n = x_.bodies();
+    std::atomic<int> first{n};
+    sesi::parallel::for_chunks(n, sesi::parallel::chunks_for(n), [&](int begin, int end, int) {
+      for (int b = begin; b < end && b < first.load(std::memory_order_relaxed); ++b) {
+        if (x_.q.col(b).allFinite() && x_.p.col(b).allFinite()) continue;
+        int seen = first.load(std::memory_order_relaxed);
+        while (b < seen && !first.compare_exchange_weak(seen, b, std::memory_order_relaxed)) {
+        }
+        return;
+      }
+    });
+    return first.load() < n ? first.load() + 1 : 0;
   }
   double energy() override { return sys_.energy(shown(), w_); }
   Eigen::VectorXd momentum_map() override { return sesi::momentum_map(sys_, shown()); }
@@ -172,6 +184,36 @@ class ChartIntegrator final : public Integrator {
   Eigen::MatrixXd local_points() override {
     sys_.embed_all(shown(), w_);
     return w_.X;
+  }
+  bool listed_close_pairs(double reach, std::vector<std::pair<int, int>>& out) override {
+    if constexpr (surface) return false;  // (partners are images there: the caller's search)
+    const sesi::NeighbourLists* lists = sys_.neighbour_lists(w_, reach);
+    if (!lists) return false;
+    // The chord of reach bounds the pairs, as the neighbour index measures them (a chord is
+    // monotone in the distance); w_.X holds the points energy() saw.
+    const double chord = sys_.chart().chord_of_distance(reach);
+    // Rows in chunks on threads, each into its own buffer, joined in chunk order: the pairs in
+    // ascending (i, j) whatever the thread count.
+    const int n = lists->bodies();
+    const int chunks = sesi::parallel::chunks_for(n);
+    close_.resize(static_cast<std::size_t>(chunks));
+    sesi::parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
+      std::vector<std::pair<int, int>>& found = close_[static_cast<std::size_t>(c)];
+      found.clear();
+      typename sesi::detail::ImageVector<Chart>::type y(w_.X.rows());
+      for (int i = begin; i < end; ++i) {
+        for (int e = lists->begin(i); e < lists->end(i); ++e) {
+          const int j = lists->index[static_cast<std::size_t>(e)];
+          if (j <= i) continue;
+          if (sesi::NeighbourIndex<Chart>::chord2_of(sys_.chart(), w_.X, i, j, y) < chord * chord) {
+            found.emplace_back(i, j);
+          }
+        }
+      }
+    });
+    out.clear();
+    for (const auto& found : close_) out.insert(out.end(), found.begin(), found.end());
+    return true;
   }
   Eigen::VectorXd to_local(const Eigen::VectorXd& world) const override {
     if constexpr (sesi::ClusterChart<Chart>) {
@@ -398,6 +440,7 @@ class ChartIntegrator final : public Integrator {
   double schedule_jumps_ = 0.0;  // Nose-Hoover: the extended energy's jumps at kT changes (set_temperature)
   std::unique_ptr<AnyStepper<SystemOf<Chart>>> stepper_;  // refers to sys_
   typename SystemOf<Chart>::Workspace w_ = sys_.make_workspace();  // the diagnostics' own
+  std::vector<std::vector<std::pair<int, int>>> close_;  // listed_close_pairs' buffers, per chunk
   // Processed methods (AnyStepper::processed): the step of the kernel's variables in
   // framed_state (the scene's), the initial state, and the post-processed state (shown()).
   double dt_ = 0.0;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -66,6 +67,14 @@ class Integrator {
   virtual bool clustered() const = 0;
   virtual Eigen::MatrixXd local_points() = 0;
   virtual Eigen::VectorXd to_local(const Eigen::VectorXd& world) const = 0;
+  /// The pairs (i < j, 0-based) of the state energy() last saw that are closer than reach,
+  /// from the neighbour lists the forces already keep (a short-range term of range >= reach),
+  /// into out; false, with out untouched, where there are none (the caller then searches).
+  virtual bool listed_close_pairs(double reach, std::vector<std::pair<int, int>>& out) {
+    static_cast<void>(reach);
+    static_cast<void>(out);
+    return false;
+  }
   /// The state as stepped, and its restoration (a checkpoint's; the run goes on bit for bit as
   /// if it had not stopped: the stepper's caches are recomputed from it alike). restore takes a
   /// state of its own kind only (FramedState::embedded; make_integrator(scene, from) converts).

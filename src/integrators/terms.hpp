@@ -121,13 +121,37 @@ using PairTerms = PairSum<sesi::geodesic_distance, sesi::CotangentGravity<double
 /// cutoff (sesi::ShortRangeTerm).
 template <class Chart>
 class ShortPairTerms : public PairSum<sesi::geodesic_distance, sesi::LennardJones<double>> {
+  using Base = PairSum<sesi::geodesic_distance, sesi::LennardJones<double>>;
+
  public:
+  void add(sesi::LennardJones<double> term) {
+    Base::add(term);
+    lj_.push_back(term);
+  }
   template <class Space>
   double range(const Space&) const {
     double r = 0.0;
-    for (const auto& term : terms()) r = std::max(r, std::get<sesi::LennardJones<double>>(term).cutoff);
+    for (const auto& term : lj_) r = std::max(r, term.cutoff);
     return r;
   }
+  /// The many-body kernel's call (sesi::System::add_gradient_by_pairs), once per pair in a Verlet
+  /// list: the sum of the terms' dW/dd / sn (LennardJones::derivative_over, one division fewer
+  /// than PairSum's dW/dd / sn), without the variant, inlined.
+  template <class Space>
+    requires sesi::HasPairGeometry<Space>
+  SESI_INLINE double derivative_over_sn(const Space& space, const sesi::PairGeometry<double>& g, double mi,
+                                        double mj) const {
+    static_cast<void>(mi);
+    static_cast<void>(mj);
+    const double d = space.distance_of(g);
+    if (lj_.size() == 1) return 0.0 + lj_.front().derivative_over(space, d, g.sn);
+    double w = 0.0;
+    for (const auto& term : lj_) w += term.derivative_over(space, d, g.sn);
+    return w;
+  }
+
+ private:
+  std::vector<sesi::LennardJones<double>> lj_;  // the terms, as the base holds them
 };
 
 /// An external potential given as code (FunctionExternalSpec), on world points: in a cluster

@@ -63,6 +63,7 @@ class ThermostatStepper final : public AnyStepper<Sys> {
   void step(typename Sys::StateType& x, double t, double dt) override {
     engine_.do_step(std::cref(sys_), x, t, dt);
   }
+  typename Sys::Workspace* workspace() override { return &engine_.workspace(); }
   sesi::Thermostat<Chart>& thermostat() { return engine_.stage(); }
   const sesi::Thermostat<Chart>& thermostat() const { return engine_.stage(); }
 

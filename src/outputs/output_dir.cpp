@@ -40,9 +40,9 @@ constexpr std::string_view manifest_head = "# sesi-manifest 1:";
 
 /// Every name sesi writes into an output directory (pictures are sesi's only by a manifest).
 bool is_sesi_name(std::string_view name) {
-  static constexpr std::array<std::string_view, 8> names = {"trajectory.csv", "trajectory.h5", "diagnostics.csv",
+  static constexpr std::array<std::string_view, 9> names = {"trajectory.csv", "trajectory.h5", "diagnostics.csv",
                                                             "exact.csv",      "summary.json",  "checkpoint",
-                                                            marker_name,      manifest_name};
+                                                            "profile.csv",    marker_name,     manifest_name};
   return std::find(names.begin(), names.end(), name) != names.end();
 }
 
@@ -620,6 +620,16 @@ fs::path shown_path(const fs::path& path) {
     return relative == "." ? target : target / relative;
   }
   return path;
+}
+
+void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path temporary = path.string() + ".tmp";
+  std::FILE* file = std::fopen(temporary.c_str(), "w");
+  bool ok = file != nullptr;
+  if (ok) ok = std::fwrite(text.data(), 1, text.size(), file) == text.size();
+  if (file) ok = std::fclose(file) == 0 && ok;
+  if (ok) ok = std::rename(temporary.c_str(), path.c_str()) == 0;
+  if (!ok) throw std::runtime_error("cannot write " + shown_path(path).string() + ": " + std::strerror(errno));
 }
 
 }  // namespace sesi::program

@@ -110,4 +110,8 @@ void add_to_manifest(const std::filesystem::path& dir, const std::vector<std::st
 /// shown inside its output directory (the --out the user gave), never the temporary name.
 std::filesystem::path shown_path(const std::filesystem::path& path);
 
+/// text into path through a temporary file beside it and a rename, so that the file is whole
+/// or absent; a write error throws std::runtime_error naming path as shown_path shows it.
+void write_file_atomically(const std::filesystem::path& path, const std::string& text);
+
 }  // namespace sesi::program

@@ -52,15 +52,6 @@ std::vector<std::string> diagnostics_header(const Scene& scene, const std::vecto
   return names;
 }
 
-void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path temporary = path.string() + ".tmp";
-  std::FILE* file = std::fopen(temporary.c_str(), "w");
-  bool ok = file != nullptr;
-  if (ok) ok = std::fwrite(text.data(), 1, text.size(), file) == text.size();
-  if (file) ok = std::fclose(file) == 0 && ok;
-  if (ok) ok = std::rename(temporary.c_str(), path.c_str()) == 0;
-  if (!ok) throw std::runtime_error("cannot write " + shown_path(path).string() + ": " + std::strerror(errno));
-}
 }  // namespace
 
 std::vector<std::string> momentum_names(int ambient_dim, bool translations) {

@@ -8,6 +8,8 @@
 #include <vector>
 
 #include <sesi/guard.hpp>
+#include <sesi/parallel.hpp>
+#include <sesi/profile.hpp>
 
 #include "checkpoint.hpp"
 #include "errors.hpp"
@@ -35,7 +37,7 @@ class EncounterCheck {
   /// The encounter deepest below its floor among the points x (ambient x bodies; the
   /// integrator's local points, force centres moved there by its to_local), as the detail of
   /// the run's failure, or "" when none.
-  std::string check(const Eigen::MatrixXd& x, const Integrator& integrator) const {
+  std::string check(const Eigen::MatrixXd& x, Integrator& integrator) const {
     double worst = 1.0;
     std::string detail;
     const auto consider = [&](const Term& t, double d, int i, int j) {
@@ -66,7 +68,11 @@ class EncounterCheck {
         }
         continue;
       }
-      for (const auto& [i, j] : geometry_.close_pairs(x, t.floor)) pair(t, i, j);
+      // The pairs from the lists the forces keep, where they hold them: one neighbour structure
+      // per step (issue #27); else the geometry's own search.
+      std::vector<std::pair<int, int>> close;
+      if (!integrator.listed_close_pairs(t.floor, close)) close = geometry_.close_pairs(x, t.floor);
+      for (const auto& [i, j] : close) pair(t, i, j);
       if (scene_.space.kind == SpaceKind::sphere && std::holds_alternative<CotangentGravitySpec>(spec)) {
         for (const auto& [i, j] : geometry_.close_pairs(x, t.floor, /*antipodal=*/true)) pair(t, i, j);
       }
@@ -291,6 +297,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   const EncounterCheck encounters(scene, geometry);
   // The checkpoint of the state after step k, with the outputs as the recorder has them now.
   const auto take_checkpoint = [&](long k) {
+    const sesi::profile::Scope profiled(sesi::profile::Phase::checkpoint);
     Checkpoint c;
     c.scene = scene;
     c.scene.bodies.clear();  // the masses only: the state is the checkpoint's own
@@ -322,6 +329,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   // energy and momentum map (into s), the close-encounter floor, then the energy guard (an
   // encounter also spoils the energy). On a failure, outcome says which.
   const auto passes_checks = [&](long k) {
+    const sesi::profile::Scope profiled(sesi::profile::Phase::checks);
     int bad_body = 0;
     try {
       s.energy = integrator.energy();
@@ -377,6 +385,10 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   // where it was found and this last step known good, and no row is written past it.
   Snapshot good = s;
   bool good_written = first_written;
+  // The profile covers the steps: from here to the loop's end (not the first row, nor the last
+  // row written after the loop for a state known good between rows).
+  long stepped = first;  // the last step taken (the profile's count)
+  if (control.profile) sesi::profile::start(sesi::parallel::threads());
   for (long k = first + 1; k <= schedule.steps; ++k) {
     if (control.interrupted && control.interrupted->load(std::memory_order_relaxed)) {
       // The run stops after step k - 1 (finite), checked here if it was not: the stop, the
@@ -422,6 +434,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
       integrator.set_thermostat_step(static_cast<std::uint64_t>(k - 1));
     }
     try {
+      stepped = k;
       integrator.step(schedule.time(k - 1), schedule.h(k));
     } catch (const InvariantFailure& e) {
       outcome.reason = StopReason::invariant_failed;
@@ -429,7 +442,12 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
       fail_at(k);
       break;
     }
-    if (const int bad_body = integrator.first_non_finite_body(); bad_body != 0) {
+    int non_finite_body = 0;
+    {
+      const sesi::profile::Scope profiled(sesi::profile::Phase::checks);
+      non_finite_body = integrator.first_non_finite_body();
+    }
+    if (const int bad_body = non_finite_body; bad_body != 0) {
       set_non_finite(bad_body);
       fail_at(k);
       break;
@@ -439,6 +457,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
       break;
     }
     if (check) {
+      const sesi::profile::Scope profiled(sesi::profile::Phase::output);  // rows, statistics (and checkpoints)
       s.step = k;
       s.t = schedule.time(k);
       integrator.read(s.q, s.p);
@@ -455,6 +474,10 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
     }
     if (control.progress) control.progress->update(k, schedule.time(k));
     if (control.after_step) control.after_step(k);
+  }
+  if (control.profile) {
+    outcome.profile = sesi::profile::stop();
+    outcome.profile->steps = stepped - first;
   }
   // The outputs end at the last state known good: a row if it is not one yet, and the summary's
   // final state.

@@ -14,6 +14,8 @@
 
 #include <Eigen/Core>
 
+#include <sesi/profile.hpp>
+
 namespace sesi::program {
 
 class ProgressBar;
@@ -63,6 +65,9 @@ struct RunOutcome {
   double failed_t = 0.0;   ///< its end time
   int failed_body = 0;     ///< 1-based, 0 when not known
   std::string detail;      ///< what failed, in words
+  /// With RunControl::profile: the profile of the run's steps (its `steps` the steps taken here,
+  /// from the first after the start or checkpoint to the last known good).
+  std::optional<sesi::profile::Report> profile;
   bool complete() const { return reason == StopReason::completed; }
 };
 
@@ -76,6 +81,8 @@ struct RunControl {
   /// Called with each checkpoint the run takes (every checkpoint_every steps, and at a signal);
   /// writes it (checkpoint.hpp). Empty: none taken.
   std::function<void(const Checkpoint&)> checkpoint;
+  /// Profile the steps (sesi::profile; `sesi run --profile`): RunOutcome::profile.
+  bool profile = false;
 };
 
 /// What RunOutcome::detail says of a non-finite state: "the state became non-finite: body 3's

@@ -39,6 +39,9 @@ class AnyStepper {
   virtual ~AnyStepper() = default;
   /// Advance x from t to t + dt.
   virtual void step(StateType& x, double t, double dt) = 0;
+  /// The composition engine's workspace, whose Verlet lists diagnostics may share
+  /// (sesi::Workspace::share_lists), or null for a stepper without one.
+  virtual typename Sys::Workspace* workspace() { return nullptr; }
 
   // Processed methods (ProcessedStepper, sesi::Processed): x is then the kernel's variables z
   // once the first step has entered them, and the state is output(x). The defaults are the other
@@ -103,6 +106,7 @@ class CompositionStepper final : public AnyStepper<Sys> {
   void step(typename Sys::StateType& x, double t, double dt) override {
     engine_.do_step(std::cref(sys_), x, t, dt);
   }
+  typename Sys::Workspace* workspace() override { return &engine_.workspace(); }
 
  private:
   const Sys& sys_;

@@ -7,10 +7,15 @@ pairs within the cutoff times the force evaluations per step (so ns_per_pair is 
 and that bad options are refused with exit status 2, one line naming the option, nothing written.
 Topologies (issue #26): --box gives the E^2 box row and a LAMMPS row on the same bodies (when lmp is
 on PATH), --genus a row per genus and the E^2 box at the same N, with their ratios in the summary.
+LAMMPS on S^2 and S^3 (issue #27): with lmp on PATH a Lennard-Jones sphere run has a `lammps` row (the
+E^n box at the same N and density) per (N, threads) and prints "/ LAMMPS E^n (T ranks) RATIO", a finite
+positive ratio, for every sphere row; without lmp, or with --no-lammps, no such row and one line saying so.
 Timings are not checked: speed targets live in the benchmark (docs/benchmarks.md)."""
 import argparse
 import csv
+import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -51,8 +56,12 @@ def main():
                 os.path.exists(out):
             failures.append(f"{args}: exit {r.returncode}, stderr {r.stderr!r}, written: {os.path.exists(out)}")
 
+    lmp = shutil.which("lmp") is not None
     cases = [
-        (["--space", "sphere", "--dim", "2", "--n", "300,600", "--steps", "5", "--threads", "1,2"], "sphere", 2, 2, True),
+        (["--space", "sphere", "--dim", "2", "--n", "300,600", "--steps", "5", "--threads", "1,2", "--no-lammps"],
+         "sphere", 2, 2, True),
+        # issue #27: LAMMPS on the E^2 box beside S^2, one process and mpirun -np 2.
+        (["--space", "sphere", "--dim", "2", "--n", "1000", "--steps", "40", "--threads", "1,2"], "sphere", 2, 2, True),
         (["--space", "hyperbolic", "--dim", "2", "--center-distance", "0,5", "--n", "300", "--steps", "5",
           "--repeats", "2"],
          "hyperbolic", 2, 1, True),
@@ -82,13 +91,22 @@ def main():
         distances = [float(d) for d in args[args.index("--center-distance") + 1].split(",")] \
             if "--center-distance" in args else [0.0]
         timed = len(thermostats) * threads_given if "sesi2" in methods else 0
-        expected = len(sizes) * (len(methods) * threads_given * (len(distances) + 1) + timed + (1 if lj else 0))
+        # LAMMPS rows: S^2 and S^3 Lennard-Jones, one per (N, threads), unless left out.
+        lammps_asked = lj and space == "sphere" and dim in (2, 3) and "--no-lammps" not in args
+        lammps = lammps_asked and lmp
+        expected = len(sizes) * (len(methods) * threads_given * (len(distances) + 1) + timed + (1 if lj else 0) +
+                                 (threads_given if lammps else 0))
         if len(rows) != expected:
             failures.append(f"{args}: {len(rows)} rows, expected {expected}")
         for row in rows:
             t = float(row["seconds_per_step"])
             pairs = float(row["pairs_per_step"])
             n = int(row["n_bodies"])
+            if row["space"] == "lammps":  # its peak memory is not measured
+                if not lammps or (row["dim"], row["method"], row["topology"]) != (str(dim), "velocity-verlet", "box") \
+                        or not t > 0 or not 0.5 * n < pairs < 20 * n:
+                    failures.append(f"{args}: unexpected LAMMPS row {row}")
+                continue
             if not t > 0 or not float(row["peak_rss_mb"]) > 0 or not pairs > 0:
                 failures.append(f"{args}: non-positive figure in {row}")
                 continue
@@ -126,8 +144,33 @@ def main():
             counts = sorted({row["threads"] for row in rows if row["space"] == space})
             if counts != ["1", "2"]:
                 failures.append(f"{args}: thread counts {counts}")
+        if lammps:
+            # One LAMMPS row per (N, threads) of the sesi rows, its ranks the threads, and every
+            # sphere row's ratio to it in the summary, finite and positive.
+            for n in sizes:
+                want = sorted(row["threads"] for row in rows if row["space"] == space and row["method"] == methods[0]
+                              and int(row["n_bodies"]) == n)
+                got = sorted(row["threads"] for row in rows if row["space"] == "lammps" and int(row["n_bodies"]) == n)
+                if got != want:
+                    failures.append(f"{args}: LAMMPS rows at N = {n} for threads {got}, expected {want}")
+            ratios = 0
+            for line in r.stdout.splitlines():
+                head = re.match(rf"\s*\d+ bodies {space}\s+{dim} \S+\s+(\d+) thr:", line)
+                if not head:
+                    continue
+                found = re.search(r"/ LAMMPS E\^(\d) \((\d+) ranks\) (\S+)", line)
+                value = float(found.group(3)) if found else math.nan
+                if not found or found.group(1) != str(dim) or found.group(2) != head.group(1) or \
+                        not (math.isfinite(value) and value > 0):
+                    failures.append(f"{args}: no finite positive LAMMPS E^{dim} ratio for the same threads in {line!r}")
+                ratios += 1
+            if ratios != sum(row["space"] == space for row in rows):
+                failures.append(f"{args}: {ratios} sphere rows with a LAMMPS ratio in the summary, expected "
+                                f"{sum(row['space'] == space for row in rows)}")
+        elif lammps_asked or "--no-lammps" in args:
+            if "LAMMPS rows left out: " not in r.stdout or "/ LAMMPS" in r.stdout:
+                failures.append(f"{args}: without LAMMPS, no line saying the rows are left out, or a ratio to LAMMPS")
     # Topologies (issue #26): the rows in order, their figures, and the ratios of the summary.
-    lmp = shutil.which("lmp") is not None
     for args, expected, ratios in [
             (["--space", "euclidean", "--dim", "2", "--box", "--n", "300", "--steps", "5", "--threads", "1"],
              [("euclidean", "2", "sesi2", "box")] + ([("lammps", "2", "velocity-verlet", "box")] if lmp else []),

@@ -6,9 +6,13 @@
 // run-time malloc check (EIGEN_RUNTIME_NO_MALLOC, defined before Eigen is included) reports every
 // heap allocation of an Eigen object through eigen_assert, redirected here to a counter. The last
 // test case checks that both counters see an allocation when there is one.
+#include <cmath>
 #include <cstddef>
 #include <cstdlib>
 #include <new>
+#include <numbers>
+#include <random>
+#include <vector>
 
 namespace alloc_counter {
 inline bool counting = false;
@@ -180,6 +184,72 @@ TEST_CASE("alloc: no allocation per step on Eigen::Dynamic charts") {
   check_chart<sesi::Sphere<Eigen::Dynamic, double>>(3);
   check_chart<sesi::Hyperbolic<Eigen::Dynamic, double>>(4);
   check_chart<sesi::Euclidean<Eigen::Dynamic, double>>(3);
+}
+
+// Many bodies through a Verlet list (issue #27): the world points of a Lennard-Jones run on S^2
+// (rows mode), fed to a Verlet list through several rebuilds after a warm-up, on one thread and on
+// two: an update, rebuild included, allocates nothing (NeighbourIndex keeps its buffers'
+// capacities with a slack). Counted on the list itself: a whole step also resizes System's pair
+// buffers (w.mirror, w.pair_dw, w.pair_omc) when a rebuild finds more pairs, which is System's.
+TEST_CASE("alloc: no allocation in Verlet list updates and rebuilds (Lennard-Jones on S^2)") {
+  using Chart = sesi::Sphere<2, double>;
+  using Scene = sesi::System<Chart, sesi::LennardJones<double>>;
+  const int n = 2000;
+  // Density 1/2 (radius from 4 pi R^2 = n / 0.5): a Fibonacci lattice, no pair in the repulsive core.
+  const Chart chart(std::sqrt(n / 0.5 / (4.0 * std::numbers::pi)));
+  const Scene sys(chart, std::vector<double>(static_cast<std::size_t>(n), 1.0), sesi::LennardJones<double>{});
+  REQUIRE(sys.by_rows());
+  sesi::State<Chart> x(2, n);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal;
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0)), R = chart.radius();
+  Eigen::Vector3d y, v;
+  Eigen::Vector2d q, p;
+  for (int b = 0; b < n; ++b) {
+    const double z = 1.0 - (2.0 * b + 1.0) / n, r = std::sqrt(1.0 - z * z);
+    y << R * r * std::cos(golden * b), R * r * std::sin(golden * b), R * z;
+    for (int k = 0; k < 3; ++k) v[k] = normal(rng);
+    v -= (v.dot(y) / (R * R)) * y;
+    chart.chart(y, q);
+    chart.momentum(q, v, 1.0, p);
+    x.q.col(b) = q;
+    x.p.col(b) = p;
+  }
+  // The run's world points, every step.
+  const double tau = 0.005, range = 2.5;
+  const int steps = 150;
+  std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> frames;
+  sesi::Strang<Chart> stepper;
+  for (int k = 0; k < steps; ++k) {
+    stepper.do_step(sys, x, k * tau, tau);
+    Eigen::Matrix<double, 3, Eigen::Dynamic> X(3, n);
+    for (int b = 0; b < n; ++b) {
+      q = x.q.col(b);
+      chart.embed(q, y);
+      X.col(b) = y;
+    }
+    frames.push_back(std::move(X));
+  }
+  REQUIRE(x.q.allFinite());
+  for (const int threads : {1, 2}) {
+    INFO("threads " << threads);
+    sesi::parallel::set_threads(threads);
+    sesi::VerletList<Chart> list;
+    const int warm = 50;  // the first third: through two rebuilds, so that the buffers have their size
+    for (int k = 0; k < warm; ++k) list.update(chart, frames[static_cast<std::size_t>(k)], range);
+    const long before = list.builds();
+    CHECK(before >= 3);
+    const Counts c = count([&] {
+      for (int k = warm; k < steps; ++k) list.update(chart, frames[static_cast<std::size_t>(k)], range);
+    });
+    const long rebuilds = list.builds() - before;
+    MESSAGE("threads ", threads, ": ", rebuilds, " list rebuilds in ", steps - warm, " counted updates");
+    CHECK(rebuilds >= 2);  // the counted updates went through rebuilds
+    CHECK(list.visit_order().size() == static_cast<std::size_t>(n));
+    CHECK(c.news == 0);
+    CHECK(c.eigen == 0);
+  }
+  sesi::parallel::set_threads(0);
 }
 
 TEST_CASE("alloc: the counters see allocations") {

@@ -52,14 +52,14 @@ class Euclidean {
   /// The chord is the distance (neighbours.hpp).
   Scalar chord_of_distance(Scalar d) const { return d; }
   /// The pair x, y (pairs in System): chord = sn = |x - y|, cs = 1.
-  PairGeometry<Scalar> pair_geometry(const Ambient& x, const Ambient& y) const {
+  SESI_INLINE PairGeometry<Scalar> pair_geometry(const Ambient& x, const Ambient& y) const {
     using std::sqrt;
     PairGeometry<Scalar> g;
     g.chord2 = (x - y).squaredNorm();
     g.sn = sqrt(g.chord2);
     return g;
   }
-  Scalar distance_of(const PairGeometry<Scalar>& g) const { return g.sn; }
+  SESI_INLINE Scalar distance_of(const PairGeometry<Scalar>& g) const { return g.sn; }
   void distance_gradient(const Ambient& x, const Ambient& y, Ambient& g) const {
     g = x - y;
     const Scalar norm = g.norm();

@@ -449,7 +449,7 @@ class Hyperbolic {
   }
   /// The pair x, y with one square root (chart.hpp, PairGeometry): chord c = |x - y|_L,
   /// R sinh(d/R) = c sqrt(4R^2 + c^2) / 2R and 1 - cosh(d/R) = -c^2 / 2R^2 (no cancellation).
-  PairGeometry<Scalar> pair_geometry(const Ambient& x, const Ambient& y) const {
+  SESI_INLINE PairGeometry<Scalar> pair_geometry(const Ambient& x, const Ambient& y) const {
     using std::sqrt;
     PairGeometry<Scalar> g;
     const Scalar c2 = minkowski(x - y, x - y);
@@ -460,7 +460,7 @@ class Hyperbolic {
     return g;
   }
   /// The geodesic distance of a pair_geometry: 2R asinh(c / 2R), as distance().
-  Scalar distance_of(const PairGeometry<Scalar>& g) const {
+  SESI_INLINE Scalar distance_of(const PairGeometry<Scalar>& g) const {
     using std::asinh;
     using std::sqrt;
     return Scalar(2) * radius_ * asinh(sqrt(g.chord2) / (Scalar(2) * radius_));
