@@ -177,7 +177,8 @@ template <class Scalar>
 Real worst_atan2_ulps(Scalar y, Scalar x, Real worst) {
   for (const Scalar sy : {y, -y}) {
     for (const Scalar sx : {x, -x}) {
-      for (const auto& [a, b] : {std::pair{sy, sx}, std::pair{sx, sy}}) {
+      for (const auto& ab : {std::pair{sy, sx}, std::pair{sx, sy}}) {
+        const Scalar a = ab.first, b = ab.second;  // (not a structured binding: INFO's lambda captures them)
         const Real e = ulps(sp::atan2_fast(a, b), std::atan2(Real(a), Real(b)));
         if (!(e <= 2)) {  // 2 ulp: the derivation above
           INFO("atan2_fast(", double(a), ", ", double(b), ") = ", double(sp::atan2_fast(a, b)), ", ",
@@ -269,7 +270,8 @@ TEST_CASE_TEMPLATE("special: atan2_sqrt_fast within 3.5 ulp of long double atan2
     const int spread = i % 3 == 0 ? (is_float ? 40 : 120) : 4;
     const Scalar r = i % 3 == 2 ? Scalar(0.0625 * (1 + unit(g) / 64))
                                 : std::ldexp(Scalar(1 + unit(g)), -spread + int(2 * spread * unit(g)) - 1);
-    for (const auto& [a, b] : {std::pair{Scalar(x2 * r), x2}, std::pair{x2, Scalar(x2 * r)}}) {
+    for (const auto& ab : {std::pair{Scalar(x2 * r), x2}, std::pair{x2, Scalar(x2 * r)}}) {
+      const Scalar a = ab.first, b = ab.second;  // (not a structured binding: INFO's lambda captures them)
       const Scalar v = sp::atan2_sqrt_fast(a, b);
       const Real e = ulps(v, std::atan2(std::sqrt(Real(a)), std::sqrt(Real(b))));
       if (!(e <= Real(3.5))) {  // 3.5 ulp: the derivation above
