@@ -278,6 +278,7 @@ class NeighbourIndex {
   /// A row in ascending order: an insertion sort for the short rows of a pair cutoff (no call to
   /// memmove for every element, as std::sort's has), std::sort for long ones.
   static void sort_row(int* first, int* last) {
+    if (last - first < 2) return;  // (an empty row of an empty buffer: first may be null)
     if (last - first > 48) {
       std::sort(first, last);
       return;
