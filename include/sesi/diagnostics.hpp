@@ -83,6 +83,56 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, Eigen::Dynamic> embedding_ve
   return V;
 }
 
+/// A momentum map m of bodies in a cluster frame C (State::cluster; rotations only, H^n), taken
+/// in that frame, in world coordinates: M = C M_local C^T (see the file comment).
+template <class Scalar, class Frame>
+Eigen::Matrix<Scalar, Eigen::Dynamic, 1> momentum_map_in_world(const Eigen::Matrix<Scalar, Eigen::Dynamic, 1>& m,
+                                                              const Frame& cluster) {
+  const int a = static_cast<int>(cluster.rows());
+  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> ml = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>::Zero(a, a);
+  int k = 0;
+  for (int r = 0; r < a; ++r) {
+    for (int c = r + 1; c < a; ++c, ++k) {
+      ml(r, c) = m[k];
+      ml(c, r) = -m[k];
+    }
+  }
+  const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> mw = cluster * ml * cluster.transpose();
+  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> out(m.size());
+  k = 0;
+  for (int r = 0; r < a; ++r) {
+    for (int c = r + 1; c < a; ++c, ++k) out[k] = mw(r, c);
+  }
+  return out;
+}
+
+/// The momentum map of bodies with world points X and world velocities V (ambient x bodies) and
+/// masses mass(b): sum_b m_b v_b first where the space has translations (E^n), then for each r < c
+/// sum_b m_b (x_r v_c - v_r x_c), each component summed in body order (momentum_map below; a
+/// simulation across processes gathers the points and takes the same sums).
+template <class Scalar, class Mass>
+Eigen::Matrix<Scalar, Eigen::Dynamic, 1> momentum_map_of(const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& X,
+                                                         const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& V,
+                                                         Mass&& mass, bool translations) {
+  const int a = static_cast<int>(X.rows());
+  const int n = static_cast<int>(X.cols());
+  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> out =
+      Eigen::Matrix<Scalar, Eigen::Dynamic, 1>::Zero(a * (a - 1) / 2 + (translations ? a : 0));
+  int k = 0;
+  if (translations) {
+    for (int b = 0; b < n; ++b) out.head(a) += mass(b) * V.col(b);
+    k = a;
+  }
+  for (int r = 0; r < a; ++r) {
+    for (int c = r + 1; c < a; ++c, ++k) {
+      for (int b = 0; b < n; ++b) {
+        out[k] += mass(b) * (X(r, b) * V(c, b) - V(r, b) * X(c, b));
+      }
+    }
+  }
+  return out;
+}
+
 /// The momentum map as a vector (see the file comment for the layout).
 template <class Sys>
 Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, 1> momentum_map(
@@ -93,43 +143,10 @@ Eigen::Matrix<typename Sys::Scalar, Eigen::Dynamic, 1> momentum_map(
     // In the cluster's frame, then M = C M_local C^T (see the file comment).
     State<Chart> local = s;
     local.clustered = false;
-    const auto m = momentum_map(sys, local);
-    const int a = sys.ambient_dim();
-    Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> ml =
-        Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>::Zero(a, a);
-    int k = 0;
-    for (int r = 0; r < a; ++r) {
-      for (int c = r + 1; c < a; ++c, ++k) {
-        ml(r, c) = m[k];
-        ml(c, r) = -m[k];
-      }
-    }
-    const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> mw = s.cluster * ml * s.cluster.transpose();
-    Eigen::Matrix<Scalar, Eigen::Dynamic, 1> out(m.size());
-    k = 0;
-    for (int r = 0; r < a; ++r) {
-      for (int c = r + 1; c < a; ++c, ++k) out[k] = mw(r, c);
-    }
-    return out;
+    return momentum_map_in_world<Scalar>(momentum_map(sys, local), s.cluster);
   }
-  const auto X = embedding_points(sys, s);
-  const auto V = embedding_velocities(sys, s);
-  const int a = sys.ambient_dim();
-  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> out =
-      Eigen::Matrix<Scalar, Eigen::Dynamic, 1>::Zero(momentum_map_size(sys.chart()));
-  int k = 0;
-  if constexpr (has_translations<Chart>) {
-    for (int b = 0; b < sys.bodies(); ++b) out.head(a) += sys.mass(b) * V.col(b);
-    k = a;
-  }
-  for (int r = 0; r < a; ++r) {
-    for (int c = r + 1; c < a; ++c, ++k) {
-      for (int b = 0; b < sys.bodies(); ++b) {
-        out[k] += sys.mass(b) * (X(r, b) * V(c, b) - V(r, b) * X(c, b));
-      }
-    }
-  }
-  return out;
+  return momentum_map_of(embedding_points(sys, s), embedding_velocities(sys, s),
+                         [&](int b) { return sys.mass(b); }, has_translations<Chart>);
 }
 
 /// {sum_b |grad_b V|^2, sum_b Delta_b V} at x, in the space's metric (see the file comment), for

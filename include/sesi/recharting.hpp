@@ -15,6 +15,8 @@
 #include <type_traits>
 #include <utility>
 
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "sesi/chart.hpp"
@@ -89,11 +91,30 @@ bool cluster_centre(const Sys& sys, const State<typename Sys::Chart>& s, typenam
   const int a = ambient_dim_of(chart), n = dim_of(chart);
   typename Chart::Point q(n);
   typename Chart::Ambient x(a), mean = Chart::Ambient::Zero(a);
-  for (int b = 0; b < s.bodies(); ++b) {
+  const auto point = [&](int b) {  // body b's cluster-local point, into x
     q = s.q.col(b);
     chart.embed(q, x);
     if (s.framed()) x = (s.frames[static_cast<std::size_t>(b)] * x).eval();
-    mean += sys.mass(b) * x;
+  };
+  bool domain = false;
+  if constexpr (requires { sys.domain(); }) domain = sys.domain();
+  if (domain) {
+    // A domain of a simulation across processes (System::set_domain): component by component
+    // through its sums over all the processes' bodies (the bits of the loop below: each
+    // component summed alone, in body order).
+    std::vector<std::vector<Scalar>> rows(static_cast<std::size_t>(a), std::vector<Scalar>(static_cast<std::size_t>(s.bodies())));
+    for (int b = 0; b < s.bodies(); ++b) {
+      point(b);
+      for (int i = 0; i < a; ++i) rows[static_cast<std::size_t>(i)][static_cast<std::size_t>(b)] = sys.mass(b) * x[i];
+    }
+    if constexpr (requires { sys.sum_rows(rows[0]); }) {
+      for (int i = 0; i < a; ++i) mean[i] = sys.sum_rows(rows[static_cast<std::size_t>(i)]);
+    }
+  } else {
+    for (int b = 0; b < s.bodies(); ++b) {
+      point(b);
+      mean += sys.mass(b) * x;
+    }
   }
   // -<m,m>_L > 0 (a sum of future points), written out: GCC 12 warns falsely (array-bounds)
   // on the vectorised dot of a dynamic head of this fixed-size vector once inlined here.

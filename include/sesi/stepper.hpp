@@ -33,6 +33,7 @@
 /// Steppers model odeint's Stepper concept (order(), do_step(sys, x, t, dt), the usual types);
 /// sesi/odeint.hpp adds the stepper_category tag so that integrate_const drives them.
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -130,7 +131,7 @@ class KeptGradient {
   void keep(const Sys& sys, const state_type& x, bool frames_kept = false) {
     system_ = &sys;
     if constexpr (requires { sys.instance(); }) instance_ = sys.instance();
-    if (!frames_kept) frames_ = x.frames;
+    if (!frames_kept) copy_frames(x.frames);
     clustered_ = x.clustered;
     if (x.clustered) cluster_ = x.cluster;
   }
@@ -180,6 +181,14 @@ class KeptGradient {
     }
   }
 
+  /// frames_ = frames, copied on threads (a frame per body: 7 MB at 10^5 bodies on S^2).
+  void copy_frames(const std::vector<typename state_type::Frame>& frames) {
+    const int n = static_cast<int>(frames.size());
+    frames_.resize(frames.size(), state_type::identity_frame());
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      std::copy(frames.begin() + begin, frames.begin() + end, frames_.begin() + begin);
+    });
+  }
   /// Whether two lists of frames are equal, compared on threads.
   static bool same_frames(const std::vector<typename state_type::Frame>& a,
                           const std::vector<typename state_type::Frame>& b) {
@@ -335,6 +344,12 @@ class Composition {
       x.p.col(b) = sc.p;
     });
   }
+  /// After a drift, before the kick: the system's hook (System::drifted: a domain of a simulation
+  /// across processes refreshes its halo there), where it has one.
+  template <class Sys>
+  void drifted(const Sys& sys, state_type& x) {
+    if constexpr (requires { sys.drifted(x, ws_); }) sys.drifted(x, ws_);
+  }
   /// A stage's hooks sit in the 1-stage (Strang) step: thermostats run with that table only.
   void check_stage() const {
     if constexpr (staged) SESI_CHECK(w_.size() == 1, "a thermostat runs with the 1-stage Strang table only");
@@ -367,6 +382,7 @@ class Composition {
     for (std::size_t k = 0; k < s; ++k) {
       const Scalar half = w_[k] * dt / Scalar(2);
       forward(sys, x, pending, half, top);
+      drifted(sys, x);
       sys.kick_cached(x, w_[k] * dt, ws_);
       // Levels n-1..1 now; level 0 is fused with the next stage's first half flow.
       pending = half + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
@@ -433,6 +449,7 @@ class Composition {
         for (int i = top - 1; i >= 1; --i) flow(chart, b, i, m, half, sc);
         if (half != Scalar(0)) flow(chart, b, 0, m, half, sc);
       });
+      drifted(sys, x);
       pending = h / Scalar(2) + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
     }
     sys.kick_cached(x, pending, ws_, kept_.gradient());

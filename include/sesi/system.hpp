@@ -21,6 +21,7 @@
 #include <atomic>
 #include <concepts>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <tuple>
 #include <type_traits>
@@ -287,7 +288,48 @@ class System {
   static constexpr int rows_from = parallel::min_parallel_bodies;
   /// Whether the chart has a topology: pair terms on the minimum image, always by rows.
   static constexpr bool on_quotient = detail::QuotientChart<Chart>;
-  bool by_rows() const { return on_quotient || bodies() >= rows_from; }
+  bool by_rows() const { return on_quotient || domain_ || bodies() >= rows_from; }
+
+  /// A domain of one simulation across processes (the program's src/domain; Plimpton, J. Comput.
+  /// Phys. 117, 1 (1995)): the system holds the bodies one process steps and copies of the bodies
+  /// within reach of them (its halo, stepped elsewhere). `drifted` refreshes the copies after
+  /// every drift (drifted(), which the composition engine calls before each kick); `sum` takes a
+  /// sum over bodies (the rows of an energy, say) over the bodies this process owns, in the whole
+  /// system's body order, so that every process gets one process's bits. A domain sums pairs by
+  /// rows at any size (as the whole system does from rows_from bodies on). Empty functions: one
+  /// process.
+  using RowSum = std::function<Scalar(const std::vector<Scalar>&)>;
+  using Drifted = std::function<void(StateType&, Workspace&)>;
+  void set_domain(RowSum sum, Drifted drifted) {
+    row_sum_ = std::move(sum);
+    drifted_ = std::move(drifted);
+    domain_ = static_cast<bool>(row_sum_);
+  }
+  /// Whether this system is a domain of a simulation across processes (set_domain).
+  bool domain() const { return domain_; }
+  /// The sum of rows over bodies: in body order, or the domain's.
+  Scalar sum_rows(const std::vector<Scalar>& rows) const {
+    return row_sum_ ? row_sum_(rows) : parallel::sum_in_order(rows);
+  }
+  /// After a drift: a domain's halo is brought up to date (nothing for one process).
+  void drifted(StateType& s, Workspace& w) const {
+    if (drifted_) drifted_(s, w);
+  }
+  /// Refresh the trig caches of w for the given bodies only (their q changed from outside the
+  /// level flows: a domain's halo).
+  void refresh_bodies(const StateType& s, Workspace& w, const std::vector<int>& changed) const {
+    if constexpr (HasTrigCache<Chart>) {
+      Point q(dim());
+      for (const int b : changed) {
+        q = s.q.col(b);
+        chart_.refresh(q, w.trig[static_cast<std::size_t>(b)]);
+      }
+    } else {
+      static_cast<void>(s);
+      static_cast<void>(w);
+      static_cast<void>(changed);
+    }
+  }
 
   Workspace make_workspace() const {
     Workspace w;
@@ -309,7 +351,7 @@ class System {
         rows[static_cast<std::size_t>(b)] = sesi::kinetic_energy(chart_, q, p, mass(b));
       }
     });
-    return parallel::sum_in_order(rows);
+    return sum_rows(rows);
   }
 
   /// Refresh the per-body trig caches of w from s (charts with HasTrigCache; else nothing).
@@ -584,7 +626,7 @@ class System {
           sc.q = s.q.col(b);
           w.rows[static_cast<std::size_t>(b)] = term.laplacian(chart_, sc.q, mass(b));
         });
-        return parallel::sum_in_order(w.rows);
+        return sum_rows(w.rows);
       } else {
         return std::numeric_limits<Scalar>::quiet_NaN();
       }
@@ -606,7 +648,7 @@ class System {
                        [&](int j, int k) { row += pair_laplacian(term, sc, w, i, j, k, reach2); });
           w.rows[static_cast<std::size_t>(i)] = row;
         });
-        return parallel::sum_in_order(w.rows);
+        return sum_rows(w.rows);
       }
     } else {
       static_cast<void>(s);
@@ -636,7 +678,7 @@ class System {
             w.rows[static_cast<std::size_t>(b)] = term.laplacian(chart_, sc.x, mass(b));
           });
         }
-        return parallel::sum_in_order(w.rows);
+        return sum_rows(w.rows);
       } else {
         return std::numeric_limits<Scalar>::quiet_NaN();
       }
@@ -737,7 +779,7 @@ class System {
         sc.q = s.q.col(b);
         w.rows[static_cast<std::size_t>(b)] = term.value(chart_, sc.q, mass(b));
       });
-      return parallel::sum_in_order(w.rows);
+      return sum_rows(w.rows);
     } else {
       return term_energy(term, w, index);
     }
@@ -1246,7 +1288,7 @@ class System {
                        [&](int j, int k) { row += pair_value(term, sc, w, i, j, k, reach2); });
           w.rows[static_cast<std::size_t>(i)] = row;
         });
-        return parallel::sum_in_order(w.rows);
+        return sum_rows(w.rows);
       }
       for (int i = 0; i < bodies(); ++i) {
         w.x = w.X.col(i);
@@ -1274,13 +1316,13 @@ class System {
             w.rows[static_cast<std::size_t>(b)] = term.value(chart_, sc.x, mass(b));
           });
         }
-        return parallel::sum_in_order(w.rows);
+        return sum_rows(w.rows);
       }
       for_bodies(w, [&](int b, typename Workspace::Scratch& sc) {
         sc.x = w.X.col(b);
         w.rows[static_cast<std::size_t>(b)] = term.value(chart_, sc.x, mass(b));
       });
-      v = parallel::sum_in_order(w.rows);
+      v = sum_rows(w.rows);
     }
     return v;
   }
@@ -1407,6 +1449,9 @@ class System {
   detail::InstanceStamp instance_;
   PairSearch pair_search_ = PairSearch::automatic;
   Scalar neighbour_skin_ = Scalar(default_skin_fraction);
+  RowSum row_sum_;    // a domain's sums over its own bodies (set_domain)
+  Drifted drifted_;   // a domain's halo refresh
+  bool domain_ = false;
 };
 
 /// Deduction guide: System(chart, masses, terms...).

@@ -202,6 +202,11 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
                 "--scaling on H^2: comma-separated genera of compact surfaces holding the N bodies at the same "
                 "density (R = (N / (4 pi (g - 1) rho))^(1/2)), with the E^2 box at the same N; ratios printed.")
       ->type_name("LIST");
+  b->add_flag("--ranks", o.ranks,
+              "--scaling on S^2 Lennard-Jones: for each T of --threads (default 2) and N of --n (default "
+              "100000), `sesi run --threads T` against `mpirun -np T sesi run --threads 1` on the same scene "
+              "file, seconds per step from each run's profile, peak memory and their ratios (issue #27; "
+              "DIR/ranks.csv).");
   std::string footer = "\nMETHODS:";
   for (const bench::MethodSpec& m : bench::all_methods()) footer += " " + std::string(m.name);
   footer +=
@@ -222,7 +227,9 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchOptions& o) {
       "'flat-periodic' (a plain 3-D cell-list loop) are the references; on S^2 and S^3 (and with\n"
       "--box) rows 'lammps' time LAMMPS on the E^n box at the same N and density when lmp is on\n"
       "PATH (--no-lammps: not). --methods takes sesi run's\n"
-      "methods there (default sesi2). Plot: /usr/bin/python3 tools/plot_scaling.py DIR.\n";
+      "methods there (default sesi2). Plot: /usr/bin/python3 tools/plot_scaling.py DIR.\n"
+      "With --scaling --ranks: DIR/ranks.csv, two rows per N and T: one process of T threads and\n"
+      "T MPI ranks of one thread (docs/parallel.md).\n";
   b->footer(footer);
   return b;
 }
@@ -557,6 +564,7 @@ int bench_command(const BenchOptions& o) {
   if ((!o.dts.empty() || !o.tols.empty()) && (o.scaling || !o.figure.empty()))
     throw InputError(std::string(o.dts.empty() ? "--tols" : "--dts") + ": not with --scaling or --figure");
   if (o.no_lammps && !o.scaling) throw InputError("--no-lammps: only with --scaling");
+  if (o.ranks && !o.scaling) throw InputError("--ranks: only with --scaling");
   if (o.scaling) return bench::scaling_command(o);
   bench::Settings s;
   s.quick = o.quick;

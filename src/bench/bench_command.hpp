@@ -44,6 +44,9 @@ struct BenchOptions {
   bool box = false;                        ///< E^n in a periodic box, with LAMMPS rows (issue #26)
   bool no_lammps = false;                  ///< leave out the LAMMPS rows (--box; S^2, S^3: issue #27)
   std::string genera;                      ///< H^2: comma-separated genera of compact surfaces (empty: none)
+  /// S^2 Lennard-Jones: `sesi run --threads T` against `mpirun -np T sesi run --threads 1` for each T
+  /// of threads (default 2), N default 10^5 (issue #27; bench_scaling.hpp).
+  bool ranks = false;
 };
 
 /// Add the `bench` subcommand to app, parsing into options.

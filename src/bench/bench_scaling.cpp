@@ -1,5 +1,7 @@
 #include "bench_scaling.hpp"
 
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -8,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <optional>
@@ -15,6 +18,8 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include <sesi/parallel.hpp>
@@ -24,6 +29,7 @@
 #include "errors.hpp"
 #include "integrator.hpp"
 #include "methods.hpp"
+#include "ranks.hpp"
 #include "recorder.hpp"
 #include "run_loop.hpp"
 #include "validate.hpp"
@@ -318,9 +324,272 @@ std::vector<int> parse_genera(const std::string& text) {
   return out;
 }
 
+// ---- --ranks (issue #27): threads in one process against MPI ranks ----------------------------
+
+/// scene as a scene file that reads back to the same doubles (chart q and p, %.17g): what both
+/// runs of a --ranks point read. The scaling scenes hold one Lennard-Jones term.
+void write_scene_file(const Scene& scene, const std::filesystem::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw std::runtime_error("cannot write " + path.string());
+  const auto& lj = std::get<LennardJonesSpec>(scene.potentials.at(0));
+  std::fprintf(f, "name = \"%s\"\n[space]\nkind = \"%s\"\ndim = %d\nradius = %.17g\n", scene.name.c_str(),
+               std::string(space_name(scene.space.kind)).c_str(), scene.space.dim, scene.space.radius);
+  std::fprintf(f, "[[potential]]\nkind = \"lennard-jones\"\nepsilon = %.17g\nsigma = %.17g\ncutoff = %.17g\n", lj.epsilon,
+               lj.sigma, lj.cutoff);
+  const IntegratorSpec& in = scene.integrator;
+  std::fprintf(f, "[integrator]\nmethod = \"%s\"\ndt = %.17g\nt_end = %.17g\noutput_every = %ld\nneighbour_skin = %.17g\n",
+               in.method.c_str(), *in.dt, *in.t_end, in.output_every, in.neighbour_skin);
+  if (in.check_every > 0) std::fprintf(f, "check_every = %ld\n", in.check_every);
+  const auto vector = [&](const char* key, const Eigen::VectorXd& v) {
+    std::fprintf(f, "%s = [", key);
+    for (Eigen::Index k = 0; k < v.size(); ++k) std::fprintf(f, "%s%.17g", k ? ", " : "", v(k));
+    std::fprintf(f, "]\n");
+  };
+  for (const Body& b : scene.bodies) {
+    std::fprintf(f, "[[bodies]]\nmass = %.17g\n", b.mass);
+    vector("q", b.q);
+    vector("p", b.p);
+  }
+  if (std::fclose(f) != 0) throw std::runtime_error("cannot write " + path.string());
+}
+
+/// What a child `sesi run` (or mpirun of it) gave: its exit status, the largest resident memory of
+/// it and the processes it waited for (mpirun's ranks: the largest rank's), its output in log.
+struct ChildRun {
+  int status = -1;
+  double peak_rss_mb = 0;
+};
+
+ChildRun run_child(const std::vector<std::string>& argv, const std::filesystem::path& log,
+                   const std::vector<std::pair<std::string, std::string>>& env) {
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  // This environment with env's variables set.
+  std::vector<std::string> entries;
+  for (char** e = environ; *e; ++e) {
+    const std::string entry = *e;
+    bool replaced = false;
+    for (const auto& kv : env) replaced = replaced || entry.rfind(kv.first + "=", 0) == 0;
+    if (!replaced) entries.push_back(entry);
+  }
+  for (const auto& kv : env) entries.push_back(kv.first + "=" + kv.second);
+  std::vector<char*> envp;
+  for (std::string& e : entries) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  // posix_spawn, not fork: the child never holds a copy of this process's pages, whose resident
+  // size would count in its peak.
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  std::fflush(nullptr);
+  pid_t pid = 0;
+  const int failed = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), envp.data());
+  posix_spawn_file_actions_destroy(&actions);
+  if (failed != 0) throw std::runtime_error("sesi bench --scaling --ranks: cannot start " + argv[0]);
+  int status = 0;
+  struct rusage usage {};
+  if (wait4(pid, &status, 0, &usage) != pid) throw std::runtime_error("sesi bench --scaling --ranks: wait failed");
+  ChildRun r;
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  r.peak_rss_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // kilobytes on Linux
+  return r;
+}
+
+/// The last line of a child's log (its error), or "".
+std::string last_line(const std::filesystem::path& log) {
+  std::ifstream in(log);
+  std::string line, last;
+  while (std::getline(in, line)) {
+    if (!line.empty()) last = line;
+  }
+  return last;
+}
+
+/// Steps and seconds per step of a finished `sesi run --profile`: its profile.csv's row "step,all"
+/// (calls = steps, wall_seconds = the steps' wall time on rank 0, set-up excluded).
+std::pair<long, double> profiled_seconds_per_step(const std::filesystem::path& run_dir) {
+  std::ifstream in(run_dir / "profile.csv");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("step,all,", 0) != 0) continue;
+    std::istringstream cells(line.substr(9));
+    std::string calls, wall;
+    std::getline(cells, calls, ',');
+    std::getline(cells, wall, ',');
+    const long steps = std::stol(calls);
+    if (steps > 0) return {steps, std::stod(wall) / static_cast<double>(steps)};
+  }
+  throw std::runtime_error("no step row in " + (run_dir / "profile.csv").string());
+}
+
+std::string file_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+int ranks_scaling(const BenchOptions& o) {
+  // What a run across ranks takes (src/domain/domain_integrator.hpp), on the scene the issue's
+  // target names: S^2 Lennard-Jones.
+  if (o.space != "sphere" || o.dim != 2 || o.potential != "lennard-jones") {
+    throw InputError("--ranks: on --space sphere --dim 2 --potential lennard-jones only");
+  }
+  if (o.box || !o.genera.empty() || !o.center_distances.empty()) {
+    throw InputError("--ranks: not with --box, --genus or --center-distance");
+  }
+  if (o.repeats < 0 || o.repeats > 100) throw InputError("--repeats: from 1 to 100");
+  if (o.check_every < 0) throw InputError("--check-every: must be >= 1 (or 0, the default cadence)");
+  if (!(o.skin >= 0 && o.skin <= 1)) throw InputError("--skin: a number from 0 to 1");
+  if (o.steps < 0) throw InputError("--steps: must be > 0");
+  const std::vector<long> sizes = parse_list(o.sizes.empty() ? "100000" : o.sizes, "--n", 256, 10'000'000);
+  const std::vector<long> counts = parse_list(o.threads.empty() ? "2" : o.threads, "--threads", 2, 1024);
+  const std::vector<std::string> methods = parse_names(o.methods.empty() ? "sesi2" : o.methods);
+  for (const std::string& method : methods) {
+    if (is_embedded_method(method) || find_method_info(method)->output_stages > 0) {
+      throw InputError("--methods: '" + method + "' does not run across ranks; take a sesi method that is not processed");
+    }
+  }
+  if (!Ranks::available()) {
+    throw InputError("--ranks: this sesi is built without MPI (SESI_BUILD_MPI; Debian: libopenmpi-dev openmpi-bin)");
+  }
+  const std::string mpirun = on_path("mpirun");
+  if (mpirun.empty()) throw InputError("--ranks: no mpirun on PATH (Debian: openmpi-bin)");
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  const int rounds = o.repeats > 0 ? o.repeats : 1;
+
+  const std::filesystem::path dir = o.out.empty() ? "sesi-out/bench/scaling" : o.out;
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path path = dir / "ranks.csv", partial = dir / "ranks.csv.partial";
+  std::FILE* csv = std::fopen(partial.c_str(), "w");
+  if (!csv) throw std::runtime_error("cannot write " + partial.string());
+  std::fprintf(csv, "# sesi bench --scaling --ranks (issue #27; docs/parallel.md): S^2 Lennard-Jones at density 1/2 "
+                    "(the scenes of --scaling), one scene file per N read by both runs\n");
+  std::fprintf(csv, "# ranks = 1: sesi run --threads T; ranks = T: mpirun -np T sesi run --threads 1\n");
+  std::fprintf(csv, "# seconds_per_step: the run's profile.csv (sesi run --profile), its steps' wall time on rank 0 "
+                    "over the steps (scene reading and set-up excluded)%s\n",
+               rounds > 1 ? ", minimum over the rounds" : "");
+  std::fprintf(csv, "# peak_rss_mb: the largest resident memory of the process (mpirun: of its largest rank)\n");
+  std::fprintf(csv, "# identical: trajectory.csv and diagnostics.csv of the two runs equal byte for byte\n");
+#ifdef NDEBUG
+  std::fprintf(csv, "# build: optimised (NDEBUG)\n");
+#else
+  std::fprintf(csv, "# build: NOT optimised (no NDEBUG): timings are not representative\n");
+#endif
+  std::fprintf(csv, "n_bodies,method,ranks,threads_per_rank,steps,seconds_per_step,peak_rss_mb,identical\n");
+  std::printf("sesi bench --scaling --ranks: sphere, dim 2, lennard-jones; threads against MPI ranks (%s)\n",
+              mpirun.c_str());
+
+  // Open MPI's switches as environment variables, which other MPIs ignore: run as root (containers),
+  // and more ranks than cores (the target's machine has two).
+  std::vector<std::pair<std::string, std::string>> env = {{"OMPI_MCA_rmaps_base_oversubscribe", "1"}};
+  if (geteuid() == 0) {
+    env.emplace_back("OMPI_ALLOW_RUN_AS_ROOT", "1");
+    env.emplace_back("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+  }
+  const std::filesystem::path work =
+      std::filesystem::temp_directory_path() / ("sesi-scaling-ranks-" + std::to_string(getpid()));
+  std::filesystem::remove_all(work);
+  std::filesystem::create_directories(work);
+  bool all_identical = true;
+  std::vector<std::string> ratios;
+  try {
+    for (const long n : sizes) {
+      // About a second's worth of steps per run, as the other --scaling points (at least 40).
+      const long steps = o.steps > 0 ? o.steps : std::max(40L, std::min(20000L, std::lround(2e6 / static_cast<double>(n))));
+      for (const std::string& method : methods) {
+        ScalingPoint point;
+        point.bodies = static_cast<int>(n);
+        point.method = method;
+        point.check_every = o.check_every;
+        point.neighbour_skin = o.skin;
+        Scene scene = scaling_scene(point);
+        // A first and a last output row only: the outputs compared stay small.
+        scene.integrator.t_end = static_cast<double>(steps) * *scene.integrator.dt;
+        scene.integrator.output_every = steps;
+        const std::filesystem::path file = work / "scene.toml";
+        write_scene_file(scene, file);
+        scene = Scene{};  // not held while the children run
+        for (const long t : counts) {
+          struct Timed {
+            long ranks, threads;
+            std::filesystem::path out;
+            long steps = 0;
+            double seconds = 0, peak = 0;
+          };
+          Timed runs[2] = {{1, t, work / "threads"}, {t, 1, work / "ranks"}};
+          for (int round = 0; round < rounds; ++round) {
+            for (Timed& r : runs) {
+              std::filesystem::remove_all(r.out);
+              std::vector<std::string> argv;
+              if (r.ranks > 1) argv = {mpirun, "-np", std::to_string(r.ranks)};
+              argv.insert(argv.end(), {self, "run", file.string(), "--threads", std::to_string(r.threads), "--out",
+                                       r.out.string(), "--quiet", "--profile"});
+              const std::filesystem::path log = work / "log.txt";
+              const ChildRun child = run_child(argv, log, env);
+              if (child.status != 0) {
+                throw std::runtime_error("sesi bench --scaling --ranks: " +
+                                         std::string(r.ranks > 1 ? "mpirun -np " + std::to_string(r.ranks) + " " : "") +
+                                         "sesi run --threads " + std::to_string(r.threads) + " failed (exit status " +
+                                         std::to_string(child.status) + "): " + last_line(log));
+              }
+              const auto [timed_steps, seconds] = profiled_seconds_per_step(r.out);
+              if (round == 0 || seconds < r.seconds) r.seconds = seconds;
+              r.peak = round == 0 ? child.peak_rss_mb : std::min(r.peak, child.peak_rss_mb);
+              r.steps = timed_steps;
+            }
+          }
+          bool identical = true;
+          for (const char* name : {"trajectory.csv", "diagnostics.csv"}) {
+            identical = identical && file_bytes(runs[0].out / name) == file_bytes(runs[1].out / name);
+          }
+          all_identical = all_identical && identical;
+          for (const Timed& r : runs) {
+            std::fprintf(csv, "%ld,%s,%ld,%ld,%ld,%.6g,%.1f,%s\n", n, method.c_str(), r.ranks, r.threads, r.steps,
+                         r.seconds, r.peak, identical ? "yes" : "no");
+            std::printf("  %7ld bodies  %-8s %3ld rank%s x %3ld thread%s  %10.4g s/step  %8.1f MB%s\n", n, method.c_str(),
+                        r.ranks, r.ranks > 1 ? "s" : " ", r.threads, r.threads > 1 ? "s" : " ", r.seconds, r.peak,
+                        r.ranks > 1 ? " (largest rank)" : "");
+          }
+          std::fflush(csv);
+          char line[256];
+          std::snprintf(line, sizeof line,
+                        "  %7ld bodies %-8s %ld ranks x 1 thread / 1 rank x %ld threads: time per step %.3f, peak memory "
+                        "per process %.3f; outputs %s",
+                        n, method.c_str(), t, t, runs[1].seconds / runs[0].seconds, runs[1].peak / runs[0].peak,
+                        identical ? "identical" : "DIFFER");
+          ratios.emplace_back(line);
+          std::printf("%s\n", line);
+          std::fflush(stdout);
+        }
+      }
+    }
+  } catch (...) {
+    std::fclose(csv);
+    std::filesystem::remove(partial);
+    std::filesystem::remove_all(work);
+    throw;
+  }
+  std::filesystem::remove_all(work);
+  const bool ok = std::fclose(csv) == 0;
+  if (!ok || std::rename(partial.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot write " + path.string());
+  std::printf("\nranks against threads (time per step: target <= 1.15 at 10^5 bodies on two cores, issue #27):\n");
+  for (const std::string& line : ratios) std::printf("%s\n", line.c_str());
+  std::printf("\nwrote %s\n", path.c_str());
+  if (!all_identical) {
+    std::fprintf(stderr, "sesi: error: the outputs on ranks differ from one process's (a bug: docs/parallel.md)\n");
+    return 1;
+  }
+  return 0;
+}
+
 }  // namespace
 
 int scaling_command(const BenchOptions& o) {
+  if (o.ranks) return ranks_scaling(o);
   ScalingPoint base;
   if (o.space == "sphere") {
     base.space = SpaceKind::sphere;

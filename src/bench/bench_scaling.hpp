@@ -7,7 +7,9 @@
 /// same bodies, on S^2 and S^3 LAMMPS on the E^n box at the same N and density (issue #27; not
 /// with --no-lammps), with --genus (H^2) the compact surfaces and the E^2 box at the same N (issue
 /// #26). Each point runs in a child process, so that its peak resident memory is its own.
-/// Writes DIR/scaling.csv.
+/// Writes DIR/scaling.csv. With --ranks (issue #27, docs/parallel.md) instead: `sesi run --threads T`
+/// against `mpirun -np T sesi run --threads 1` on one S^2 scene file, as child processes timed by
+/// their profile.csv, into DIR/ranks.csv.
 
 #include "bench_command.hpp"
 

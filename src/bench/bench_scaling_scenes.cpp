@@ -550,9 +550,6 @@ double flat_cell_list_seconds_per_step(int bodies, long steps, long& pairs) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / static_cast<double>(steps);
 }
 
-namespace {
-
-/// The first executable `name` on PATH, or "".
 std::string on_path(const std::string& name) {
   const char* path = std::getenv("PATH");
   std::stringstream dirs(path ? path : "");
@@ -564,8 +561,6 @@ std::string on_path(const std::string& name) {
   }
   return {};
 }
-
-}  // namespace
 
 std::string lammps_unavailable(int ranks) {
   if (on_path("lmp").empty()) return "no LAMMPS program lmp on PATH (Debian: lammps)";

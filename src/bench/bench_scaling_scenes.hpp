@@ -60,6 +60,9 @@ long pairs_within(const Scene& scene, double cutoff);
 /// and sets `pairs` to the pairs within the cutoff at the end.
 double flat_cell_list_seconds_per_step(int bodies, long steps, long& pairs);
 
+/// The first executable `name` on PATH, or "".
+std::string on_path(const std::string& name);
+
 /// LAMMPS (the program `lmp`, issue #26) on the bodies of a scene in a periodic box of E^2 or E^3
 /// (scaling_scene with box): the same Lennard-Jones (lj/cut 2.5, pair_modify shift yes), skin
 /// (neighbor bin, cutoff x neighbour_skin; neigh_modify every 1 delay 0 check yes) and velocity

@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
   auto* every_opt =
       run->add_option("--output-every", output_every, "Steps between output rows, >= 1.")->type_name("N");
   auto* threads_opt =
-      run->add_option("--threads,-j", threads, "Threads, >= 0 (0: all cores; results do not depend on it).")
+      run->add_option("--threads,-j", threads, "Threads, >= 0 (0: all cores; results do not depend on it); per rank under mpirun.")
           ->type_name("N");
   auto* check_opt = run->add_option("--check-every", check_every,
                                     "Steps between energy and encounter checks, >= 1 (output rows are always checked).")
@@ -169,7 +169,7 @@ int main(int argc, char** argv) {
   auto* resume_t_end_opt =
       resume->add_option("--t-end", resume_t_end, "A later end of the run (default: the run's own).")->type_name("T");
   auto* resume_threads_opt =
-      resume->add_option("--threads,-j", resume_threads, "Threads, >= 0 (0: all cores; results do not depend on it).")
+      resume->add_option("--threads,-j", resume_threads, "Threads, >= 0 (0: all cores; results do not depend on it); per rank under mpirun.")
           ->type_name("N");
   resume->add_flag("--quiet,-q", resume_options.quiet, "No report on stdout and no progress bar.");
   resume->add_flag("--profile", resume_options.profile,

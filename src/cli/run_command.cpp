@@ -11,16 +11,20 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include <sesi/parallel.hpp>
 
 #include "auto_method.hpp"
 #include "checkpoint.hpp"
+#include "domain_integrator.hpp"
 #include "errors.hpp"
 #include "integrator.hpp"
 #include "output_dir.hpp"
 #include "paper_scene.hpp"
 #include "progress.hpp"
+#include "ranks.hpp"
 #include "recorder.hpp"
 #include "run_loop.hpp"
 #include "scene_reader.hpp"
@@ -166,12 +170,13 @@ std::string describe_thermostat(const ThermostatSpec& th) {
 }
 
 void print_report(const Scene& scene, const Recorder& recorder, const RunOutcome& outcome, double wall,
-                  const std::filesystem::path& dir) {
+                  const std::filesystem::path& dir, int ranks) {
   const InvariantStats& inv = recorder.invariants();
-  std::printf("%s: %s, %d bodies, method %s, dt = %s, %ld steps to t = %s in %.3f s\n", scene.name.c_str(),
+  const std::string across = ranks > 1 ? " on " + std::to_string(ranks) + " ranks" : std::string();
+  std::printf("%s: %s, %d bodies, method %s, dt = %s, %ld steps to t = %s in %.3f s%s\n", scene.name.c_str(),
               describe_space(scene.space).c_str(), scene.body_count(), scene.integrator.method.c_str(),
               format_number(*scene.integrator.dt).c_str(), outcome.steps_done,
-              format_number(*scene.integrator.t_end).c_str(), wall);
+              format_number(*scene.integrator.t_end).c_str(), wall, across.c_str());
   if (const auto& a = scene.integrator.auto_choice) {
     std::printf("  method auto (tolerance %s): %s\n", format_number(a->tolerance).c_str(), a->reason.c_str());
   }
@@ -275,84 +280,210 @@ void print_profile(const sesi::profile::Report& r, const Scene& scene, const std
                100.0 * r.serial_fraction());
 }
 
+/// A sink that keeps nothing: the ranks but rank 0 of a run across ranks (rank 0 writes the outputs).
+class NullSink final : public RunSink {
+ public:
+  void track(double, const Eigen::VectorXd&) override {}
+  void write_row(const Snapshot&) override {}
+  void set_final(Snapshot) override {}
+};
+
+/// Refuse to run when a launcher started this process as one of several but MPI is not in use
+/// (a sesi built without MPI, or srun without --mpi=pmix): each would run the whole scene.
+void refuse_without_mpi(const Ranks& ranks, std::string_view command) {
+  const long launched = Ranks::launched_processes();
+  if (ranks.distributed() || launched <= 1) return;
+  throw InputError(Origin{}, command,
+                   "started as one of " + std::to_string(launched) +
+                       " processes (mpirun, srun) without MPI in use (a sesi built without MPI: SESI_BUILD_MPI, "
+                       "libopenmpi-dev; or srun without --mpi=pmix), so each would run the whole scene; start one "
+                       "process, or use an MPI build");
+}
+
+/// Across ranks, the end of a phase before any step: status is this rank's (exit_ok: it went
+/// well) and message its error. Every rank learns every rank's status; the first rank that
+/// failed prints its message (rank 0 when it failed: a scene's errors are the same on every rank,
+/// and only rank 0 touches the output directory), and every rank returns that rank's status, so
+/// that all exit alike; exit_ok when none failed.
+int settle(const Ranks& ranks, int status, const std::string& message) {
+  std::vector<double> all;
+  std::vector<int> counts;
+  ranks.all_gather({static_cast<double>(status)}, all, counts);
+  for (std::size_t r = 0; r < all.size(); ++r) {
+    if (static_cast<int>(all[r]) == exit_ok) continue;
+    if (static_cast<int>(r) == ranks.rank()) print_error(message);
+    return static_cast<int>(all[r]);
+  }
+  return exit_ok;
+}
+
+/// A phase before any step, run on every rank: exit_ok, or the status every rank stops with
+/// (settle). In one process its errors go to main as before (InputError: exit status 2).
+template <class Phase>
+int on_every_rank(const Ranks& ranks, Phase&& phase) {
+  if (!ranks.distributed()) {
+    phase();
+    return exit_ok;
+  }
+  int status = exit_ok;
+  std::string message;
+  try {
+    phase();
+  } catch (const InputError& e) {
+    status = exit_bad_input;
+    message = e.what();
+  } catch (const std::exception& e) {
+    status = exit_internal;
+    message = e.what();
+  }
+  return settle(ranks, status, message);
+}
+
 /// The run of scene into staging, from its start or from a checkpoint (in from_dir): outputs,
 /// checkpoints, publishing and the closing report. Returns the exit status.
-int execute(const Scene& scene, StagingDir& staging, bool quiet, bool profile, const Checkpoint* from = nullptr,
-            const std::filesystem::path& from_dir = {}) {
+/// Across ranks (docs/parallel.md) every rank calls it: rank 0 with the staging directory, the
+/// others with none; rank 0 writes the outputs and reports, the others keep nothing, and all
+/// return rank 0's status.
+int execute(const Ranks& ranks, const Scene& scene, StagingDir* staging, bool quiet, bool profile,
+            const Checkpoint* from = nullptr, const std::filesystem::path& from_dir = {}) {
+  const bool root = ranks.root();
   const bool euclidean = scene.space.kind == SpaceKind::euclidean;
   const int ambient = euclidean ? scene.dim() : scene.dim() + 1;
-  std::optional<Recorder> recorder;
-  if (from) {
-    recorder.emplace(scene, staging.path(), momentum_names(ambient, euclidean), *from, from_dir);
-  } else {
-    recorder.emplace(scene, staging.path(), momentum_names(ambient, euclidean));
-  }
   const long steps = step_count(*scene.integrator.t_end, *scene.integrator.dt);
-  ProgressBar progress(steps, *scene.integrator.t_end, ProgressBar::wanted(quiet));
+  std::optional<Recorder> recorder;
+  std::optional<ProgressBar> progress;
+  // The outputs (rank 0's): a resumed run's fail here when they are not what the checkpoint says.
+  if (const int status = on_every_rank(ranks, [&] {
+        if (!root) return;
+        if (from) {
+          recorder.emplace(scene, staging->path(), momentum_names(ambient, euclidean), *from, from_dir);
+        } else {
+          recorder.emplace(scene, staging->path(), momentum_names(ambient, euclidean));
+        }
+        progress.emplace(steps, *scene.integrator.t_end, ProgressBar::wanted(quiet));
+      });
+      status != exit_ok) {
+    return status;
+  }
 
+  // --threads: per rank.
   sesi::parallel::set_threads(scene.integrator.threads);
-  const auto integrator = make_integrator(scene);
-  if (from) integrator->restore(from->state);
+  std::unique_ptr<Integrator> integrator;
+  // A scene or method that a run across ranks does not support yet is refused here (InputError).
+  if (const int status = on_every_rank(ranks, [&] {
+        integrator = ranks.distributed() ? make_domain_integrator(scene, ranks) : make_integrator(scene);
+        if (from) integrator->restore(from->state);  // every rank the whole state
+      });
+      status != exit_ok) {
+    return status;
+  }
   long checkpoint_step = -1;  // the last checkpoint written by this run
   const auto checkpoint = [&](const Checkpoint& c) {
-    write_checkpoint(c, staging.path(), staging.target());
+    // Rank 0 writes it; the other ranks take it (the integrator's framed_state is a collective
+    // call) and keep nothing.
+    if (!root) return;
+    write_checkpoint(c, staging->path(), staging->target());
     checkpoint_step = c.step;
   };
+  NullSink nothing;
+  RunSink& sink = recorder ? static_cast<RunSink&>(*recorder) : nothing;
+  RunControl control;
+  control.interrupted = &signals::stop_requested();
+  control.progress = progress ? &*progress : nullptr;
+  control.checkpoint = checkpoint;
+  control.profile = profile;
+  if (ranks.distributed()) {
+    control.agree = [&ranks](bool verdict) { return ranks.from_root(verdict); };
+    control.any = [&ranks](bool value) { return ranks.any(value); };
+  }
   const auto start = std::chrono::steady_clock::now();
-  const RunOutcome outcome =
-      run_loop(scene, *integrator, *recorder,
-               RunControl{&signals::stop_requested(), &progress, {}, checkpoint, profile}, from);
+  RunOutcome outcome;
+  if (!ranks.distributed()) {
+    outcome = run_loop(scene, *integrator, sink, control, from);
+  } else {
+    try {
+      outcome = run_loop(scene, *integrator, sink, control, from);
+    } catch (const InputError& e) {
+      // Before any step (the initial energy is not finite): the same on every rank.
+      return settle(ranks, exit_bad_input, e.what());
+    } catch (const std::exception& e) {
+      // One rank's failure that the others cannot see (rank 0's outputs cannot be written): the
+      // others wait in a collective call, so all end now; the last checkpoint stays.
+      print_error((root ? std::string() : "rank " + std::to_string(ranks.rank()) + ": ") + e.what());
+      ranks.abort(exit_internal);
+    }
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  // A resumed run that took no checkpoint of its own (one resumed at its end, or stopped before
-  // its next) keeps the one it went on from, with the settings now in force: the outputs never
-  // lose their checkpoint.
-  if (from && checkpoint_step < 0) checkpoint(*from);
-  progress.finish();
-  recorder->finish(outcome, wall);
-  if (outcome.profile) write_file_atomically(staging.path() / "profile.csv", profile_csv(*outcome.profile, scene));
-  const std::filesystem::path dir = staging.publish(outcome.complete());
-  if (outcome.profile) print_profile(*outcome.profile, scene, dir / "profile.csv");
+  // Rank 0: the checkpoint kept, the summary, publishing and the closing report.
+  const auto finish = [&]() -> int {
+    // A resumed run that took no checkpoint of its own (one resumed at its end, or stopped before
+    // its next) keeps the one it went on from, with the settings now in force: the outputs never
+    // lose their checkpoint.
+    if (from && checkpoint_step < 0) checkpoint(*from);
+    progress->finish();
+    recorder->finish(outcome, wall, ranks.size());
+    // profile.csv: rank 0's steps.
+    if (outcome.profile) {
+      write_file_atomically(staging->path() / "profile.csv", profile_csv(*outcome.profile, scene));
+    }
+    const std::filesystem::path dir = staging->publish(outcome.complete());
+    if (outcome.profile) print_profile(*outcome.profile, scene, dir / "profile.csv");
 
-  // A stopped run's checkpoint is at the step it stopped after (run_loop): one step number.
-  const std::string kept =
-      checkpoint_step < 0 ? std::string()
-      : checkpoint_step == outcome.steps_done
-          ? "; resume from its checkpoint there with: sesi resume " + dir.string()
-          : "; resume from its checkpoint (step " + std::to_string(checkpoint_step) + ") with: sesi resume " +
-                dir.string();
-  // (A thermostat changes the energy on purpose: its tolerance bounded the pilots' NVE error.)
-  if (const auto& a = scene.integrator.auto_choice;
-      a && !scene.thermostat && recorder->invariants().max_rel_energy_error > 10 * a->tolerance) {
-    std::fprintf(stderr,
-                 "sesi: warning: %s: method auto: the run's max relative energy error %s is more than 10x the "
-                 "tolerance %s (its pilot runs of %s time units did not meet what the run met); choose a smaller "
-                 "tolerance, or a method and dt\n",
-                 scene.name.c_str(), format_short(recorder->invariants().max_rel_energy_error).c_str(),
-                 format_number(a->tolerance).c_str(), format_number(a->pilot_t_end).c_str());
+    // A stopped run's checkpoint is at the step it stopped after (run_loop): one step number.
+    const std::string kept =
+        checkpoint_step < 0 ? std::string()
+        : checkpoint_step == outcome.steps_done
+            ? "; resume from its checkpoint there with: sesi resume " + dir.string()
+            : "; resume from its checkpoint (step " + std::to_string(checkpoint_step) + ") with: sesi resume " +
+                  dir.string();
+    // (A thermostat changes the energy on purpose: its tolerance bounded the pilots' NVE error.)
+    if (const auto& a = scene.integrator.auto_choice;
+        a && !scene.thermostat && recorder->invariants().max_rel_energy_error > 10 * a->tolerance) {
+      std::fprintf(stderr,
+                   "sesi: warning: %s: method auto: the run's max relative energy error %s is more than 10x the "
+                   "tolerance %s (its pilot runs of %s time units did not meet what the run met); choose a smaller "
+                   "tolerance, or a method and dt\n",
+                   scene.name.c_str(), format_short(recorder->invariants().max_rel_energy_error).c_str(),
+                   format_number(a->tolerance).c_str(), format_number(a->pilot_t_end).c_str());
+    }
+    switch (outcome.reason) {
+      case StopReason::completed:
+        if (!quiet) print_report(scene, *recorder, outcome, wall, dir, ranks.size());
+        return exit_ok;
+      case StopReason::interrupted:
+        print_error(scene.name + ": interrupted after step " + std::to_string(outcome.steps_done) + " (t = " +
+                    format_number(static_cast<double>(outcome.steps_done) * *scene.integrator.dt) +
+                    "); the outputs so far are in " + dir.string() + ", marked incomplete" + kept);
+        return exit_interrupted;
+      case StopReason::non_finite:
+      case StopReason::invariant_failed:
+      case StopReason::energy_guard:
+      case StopReason::close_encounter:
+        break;
+    }
+    print_error(scene.name + ": " + outcome.detail + " at step " + std::to_string(outcome.failed_step) +
+                " (t = " + format_number(outcome.failed_t) + ")" +
+                (outcome.failed_body > 0 ? ", body " + std::to_string(outcome.failed_body) : std::string()) +
+                "; last step known good: " + std::to_string(outcome.steps_done) + "; the outputs up to it are in " +
+                dir.string() + ", marked incomplete" +
+                (checkpoint_step < 0 ? std::string()
+                                     : ", with the last good checkpoint (step " + std::to_string(checkpoint_step) + ")"));
+    return exit_run_failed;
+  };
+  if (!root) return static_cast<int>(ranks.from_root(static_cast<long>(exit_ok)));
+  if (!ranks.distributed()) return finish();
+  // Across ranks every rank exits with rank 0's status, even after an error here.
+  int status = exit_internal;
+  try {
+    status = finish();
+  } catch (const InputError& e) {
+    print_error(e.what());
+    status = exit_bad_input;
+  } catch (const std::exception& e) {
+    print_error(e.what());
+    status = exit_internal;
   }
-  switch (outcome.reason) {
-    case StopReason::completed:
-      if (!quiet) print_report(scene, *recorder, outcome, wall, dir);
-      return exit_ok;
-    case StopReason::interrupted:
-      print_error(scene.name + ": interrupted after step " + std::to_string(outcome.steps_done) + " (t = " +
-                  format_number(static_cast<double>(outcome.steps_done) * *scene.integrator.dt) +
-                  "); the outputs so far are in " + dir.string() + ", marked incomplete" + kept);
-      return exit_interrupted;
-    case StopReason::non_finite:
-    case StopReason::invariant_failed:
-    case StopReason::energy_guard:
-    case StopReason::close_encounter:
-      break;
-  }
-  print_error(scene.name + ": " + outcome.detail + " at step " + std::to_string(outcome.failed_step) +
-              " (t = " + format_number(outcome.failed_t) + ")" +
-              (outcome.failed_body > 0 ? ", body " + std::to_string(outcome.failed_body) : std::string()) +
-              "; last step known good: " + std::to_string(outcome.steps_done) + "; the outputs up to it are in " +
-              dir.string() + ", marked incomplete" +
-              (checkpoint_step < 0 ? std::string()
-                                   : ", with the last good checkpoint (step " + std::to_string(checkpoint_step) + ")"));
-  return exit_run_failed;
+  return static_cast<int>(ranks.from_root(static_cast<long>(status)));
 }
 
 /// Where a checkpoint in source goes on to: a stopped run's own directory; for "DIR.incomplete"
@@ -413,47 +544,81 @@ std::filesystem::path checkpoint_source(const std::filesystem::path& dir) {
 }  // namespace
 
 int run_command(const RunOptions& options) {
-  if (options.out_given && options.out.empty()) {  // not the default, ./sesi-out/<scene name>
-    throw InputError(Origin{}, "--out", "expected a directory, got an empty path");
+  // Across MPI ranks (`mpirun -np K sesi run`, docs/parallel.md) every rank runs this: each reads
+  // and checks the scene itself; rank 0 alone touches the output directory.
+  Ranks ranks = Ranks::start();
+  refuse_without_mpi(ranks, "run");
+  std::optional<Scene> scene;
+  if (const int status = on_every_rank(ranks, [&] {
+        if (options.out_given && options.out.empty()) {  // not the default, ./sesi-out/<scene name>
+          throw InputError(Origin{}, "--out", "expected a directory, got an empty path");
+        }
+        scene = options.scene_path.empty() ? paper_scene() : read_scene_file(options.scene_path);
+        apply_overrides(*scene, options);
+      });
+      status != exit_ok) {
+    return status;
   }
-  Scene scene = options.scene_path.empty() ? paper_scene() : read_scene_file(options.scene_path);
-  apply_overrides(scene, options);
   const std::filesystem::path target =
-      options.out.empty() ? std::filesystem::path("sesi-out") / scene.name : std::filesystem::path(options.out);
+      options.out.empty() ? std::filesystem::path("sesi-out") / scene->name : std::filesystem::path(options.out);
   signals::begin_run();  // from here a signal stops the run between steps, with a checkpoint
-  StagingDir staging(target, options.out.empty() ? "output directory" : "--out");
-  return execute(scene, staging, options.quiet, options.profile);
+  std::optional<StagingDir> staging;
+  if (const int status = on_every_rank(ranks, [&] {
+        if (ranks.root()) staging.emplace(target, options.out.empty() ? "output directory" : "--out");
+      });
+      status != exit_ok) {
+    return status;
+  }
+  return execute(ranks, *scene, staging ? &*staging : nullptr, options.quiet, options.profile);
 }
 
 int resume_command(const ResumeOptions& options) {
-  const std::filesystem::path source = checkpoint_source(options.dir);
-  Checkpoint checkpoint = read_checkpoint(source / checkpoint_file_name);
-  Scene& scene = checkpoint.scene;
-  const Origin option{};
-  check_method(scene.integrator.method, Origin{(source / checkpoint_file_name).string()}, "method");
-  if (options.t_end) {
-    check_t_end(*options.t_end, option, "--t-end");
-    check_step_count(*options.t_end, *scene.integrator.dt, option, "--dt/--t-end");
-    scene.integrator.t_end = options.t_end;
+  Ranks ranks = Ranks::start();  // as in run_command: every rank reads the checkpoint itself
+  refuse_without_mpi(ranks, "resume");
+  std::filesystem::path source;
+  std::optional<Checkpoint> checkpoint;
+  if (const int status = on_every_rank(ranks, [&] {
+        source = checkpoint_source(options.dir);
+        checkpoint = read_checkpoint(source / checkpoint_file_name);
+        Scene& scene = checkpoint->scene;
+        const Origin option{};
+        check_method(scene.integrator.method, Origin{(source / checkpoint_file_name).string()}, "method");
+        if (options.t_end) {
+          check_t_end(*options.t_end, option, "--t-end");
+          check_step_count(*options.t_end, *scene.integrator.dt, option, "--dt/--t-end");
+          scene.integrator.t_end = options.t_end;
+        }
+        const long steps = step_count(*scene.integrator.t_end, *scene.integrator.dt);
+        if (steps < checkpoint->step) {
+          throw InputError(option, options.t_end ? "--t-end" : "t_end",
+                           "the checkpoint is at step " + std::to_string(checkpoint->step) + " (t = " +
+                               format_number(static_cast<double>(checkpoint->step) * *scene.integrator.dt) +
+                               "), after the end of the run (" + std::to_string(steps) + " steps)");
+        }
+        if (options.threads) {
+          check_threads(*options.threads, option, "--threads");
+          scene.integrator.threads = static_cast<int>(*options.threads);
+        }
+      });
+      status != exit_ok) {
+    return status;
   }
-  const long steps = step_count(*scene.integrator.t_end, *scene.integrator.dt);
-  if (steps < checkpoint.step) {
-    throw InputError(option, options.t_end ? "--t-end" : "t_end",
-                     "the checkpoint is at step " + std::to_string(checkpoint.step) + " (t = " +
-                         format_number(static_cast<double>(checkpoint.step) * *scene.integrator.dt) +
-                         "), after the end of the run (" + std::to_string(steps) + " steps)");
-  }
-  if (options.threads) {
-    check_threads(*options.threads, option, "--threads");
-    scene.integrator.threads = static_cast<int>(*options.threads);
-  }
+  const Scene& scene = checkpoint->scene;
   signals::begin_run();
   const std::filesystem::path target = resume_target(source);
-  const bool beside = source.parent_path() == target.parent_path() || source.parent_path() == target;
-  StagingDir staging(target, "sesi resume", beside ? source : std::filesystem::path());
-  const int status = execute(scene, staging, options.quiet, options.profile, &checkpoint, source);
+  std::optional<StagingDir> staging;
+  if (const int status = on_every_rank(ranks, [&] {
+        if (!ranks.root()) return;
+        const bool beside = source.parent_path() == target.parent_path() || source.parent_path() == target;
+        staging.emplace(target, "sesi resume", beside ? source : std::filesystem::path());
+      });
+      status != exit_ok) {
+    return status;
+  }
+  const int status =
+      execute(ranks, scene, staging ? &*staging : nullptr, options.quiet, options.profile, &*checkpoint, source);
   // A killed run's staging directory or DIR.incomplete, now gone on from into DIR.
-  if (status == exit_ok && source != staging.target()) remove_superseded(source);
+  if (ranks.root() && status == exit_ok && source != staging->target()) remove_superseded(source);
   return status;
 }
 

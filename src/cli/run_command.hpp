@@ -3,6 +3,11 @@
 /// `sesi run` and `sesi resume`: read the scene (or take the default), apply the command-line overrides, run it
 /// into a staging directory, publish the outputs, report. Returns the exit status
 /// (errors.hpp); bad input throws InputError before anything is written.
+///
+/// Under `mpirun -np K` (K > 1, a build with MPI; docs/parallel.md) every rank runs the same
+/// command on one simulation (src/domain/): each reads and checks the scene or checkpoint itself,
+/// rank 0 alone writes the outputs and reports, and every rank returns rank 0's status. Errors
+/// before any step are then printed once and returned, not thrown. --threads is per rank.
 
 #include <optional>
 #include <string>

@@ -289,6 +289,85 @@ class ChartIntegrator final : public Integrator {
       stepper_->assume_entered(0.0);
     }
   }
+  void set_domain(DomainHooks hooks) override {
+    if (stepper_->processed() || thermostat_ || !stepper_->workspace()) {
+      throw std::logic_error("a domain of a run across processes needs a plain chart method");
+    }
+    halo_ = std::move(hooks.halo);
+    auto refresh = std::move(hooks.drifted);
+    sys_.set_domain(std::move(hooks.sum), [this, refresh](sesi::State<Chart>& x, typename SystemOf<Chart>::Workspace& w) {
+      refresh(x.q.data(), static_cast<int>(x.q.rows()), static_cast<int>(x.q.cols()));
+      sys_.refresh_bodies(x, w, halo_);  // their trig, which the level flows kept for the old q
+    });
+  }
+  int packed_size() const override {
+    const int a = sys_.ambient_dim();
+    return 2 * sys_.dim() + a * a;
+  }
+  void pack(const std::vector<int>& bodies, std::vector<double>& out) const override {
+    const int d = sys_.dim(), a = sys_.ambient_dim();
+    for (const int b : bodies) {
+      for (int i = 0; i < d; ++i) out.push_back(x_.q(i, b));
+      for (int i = 0; i < d; ++i) out.push_back(x_.p(i, b));
+      for (int c = 0; c < a; ++c) {
+        for (int r = 0; r < a; ++r) {
+          out.push_back(x_.framed() ? x_.frames[static_cast<std::size_t>(b)](r, c) : (r == c ? 1.0 : 0.0));
+        }
+      }
+    }
+  }
+  void unpack(const std::vector<int>& bodies, const double* in) override {
+    const int d = sys_.dim(), a = sys_.ambient_dim();
+    for (const int b : bodies) {
+      for (int i = 0; i < d; ++i) x_.q(i, b) = *in++;
+      for (int i = 0; i < d; ++i) x_.p(i, b) = *in++;
+      const Eigen::Map<const Eigen::MatrixXd> frame(in, a, a);
+      in += a * a;
+      if (!x_.framed()) {
+        if (frame.isIdentity(0.0)) continue;
+        x_.enable_frames(a);
+      }
+      x_.frames[static_cast<std::size_t>(b)] = frame;
+    }
+    shown_valid_ = false;
+  }
+  Eigen::MatrixXd cluster() const override {
+    if (!x_.clustered) return {};
+    return x_.cluster;
+  }
+  void set_cluster(const Eigen::MatrixXd& c) override {
+    if constexpr (sesi::ClusterChart<Chart>) {
+      x_.clustered = c.size() != 0;
+      if (x_.clustered) x_.cluster = c;
+      shown_valid_ = false;
+    }
+  }
+  void frame_points(Eigen::MatrixXd& X, Eigen::MatrixXd& V) override {
+    if (!x_.clustered) {
+      X = points();
+      V = velocities();
+      return;
+    }
+    sesi::State<Chart> local = shown();
+    local.clustered = false;
+    X = sesi::embedding_points(sys_, local);
+    V = sesi::embedding_velocities(sys_, local);
+  }
+  Eigen::VectorXd momentum_in_world(const Eigen::VectorXd& m) const override {
+    if (!shown().clustered) return m;
+    return sesi::momentum_map_in_world<double>(m, shown().cluster);
+  }
+  void kicked_points(const std::vector<int>& bodies, Eigen::MatrixXd& out) override {
+    const auto* w = stepper_->workspace();
+    out.resize(sys_.ambient_dim(), static_cast<Eigen::Index>(bodies.size()));
+    if (w && w->X.cols() == x_.bodies()) {
+      for (std::size_t k = 0; k < bodies.size(); ++k) out.col(static_cast<Eigen::Index>(k)) = w->X.col(bodies[k]);
+      return;
+    }
+    sys_.embed_all(x_, w_);  // before the first force evaluation
+    const Eigen::MatrixXd all = w_.X;
+    for (std::size_t k = 0; k < bodies.size(); ++k) out.col(static_cast<Eigen::Index>(k)) = all.col(bodies[k]);
+  }
   /// In the scene's own chart: bodies re-charted by the stepper are mapped back (q and p of
   /// the outputs and of summary.json always mean the same coordinates).
   void read(Eigen::MatrixXd& q, Eigen::MatrixXd& p) const override {
@@ -441,6 +520,7 @@ class ChartIntegrator final : public Integrator {
   std::unique_ptr<AnyStepper<SystemOf<Chart>>> stepper_;  // refers to sys_
   typename SystemOf<Chart>::Workspace w_ = sys_.make_workspace();  // the diagnostics' own
   std::vector<std::vector<std::pair<int, int>>> close_;  // listed_close_pairs' buffers, per chunk
+  std::vector<int> halo_;  // a domain's halo (set_domain)
   // Processed methods (AnyStepper::processed): the step of the kernel's variables in
   // framed_state (the scene's), the initial state, and the post-processed state (shown()).
   double dt_ = 0.0;

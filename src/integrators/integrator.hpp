@@ -6,8 +6,10 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -39,6 +41,17 @@ struct FramedState {
   /// surface each body's group word W_b (letters: side indices 0..4g-1; unwrapped W_b x_b).
   Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic> image_counts;
   std::vector<std::vector<std::int16_t>> words;
+};
+
+/// What a domain of one simulation across processes (src/domain/domain_integrator.hpp) sets in
+/// the integrator of its bodies: the halo (bodies stepped by other processes, copied here) and
+/// how it is refreshed after every drift, and how a sum over bodies is taken (System::set_domain).
+struct DomainHooks {
+  std::vector<int> halo;  ///< the halo's bodies (indices into this integrator's bodies, ascending)
+  /// After every drift: q's halo columns (q: dim x bodies, column-major) overwritten by their owners'.
+  std::function<void(double* q, int dim, int bodies)> drifted;
+  /// A sum over bodies of one value a body (rows), the whole simulation's, in its body order.
+  std::function<double(const std::vector<double>&)> sum;
 };
 
 class Integrator {
@@ -79,6 +92,48 @@ class Integrator {
   /// if it had not stopped: the stepper's caches are recomputed from it alike). restore takes a
   /// state of its own kind only (FramedState::embedded; make_integrator(scene, from) converts).
   virtual FramedState framed_state() const = 0;
+
+  // A domain of a simulation across processes (DomainHooks). Only a chart method's integrator
+  // without a thermostat or a processed method has them (the defaults refuse).
+
+  /// Install the domain's hooks (before the first step).
+  virtual void set_domain(DomainHooks hooks) {
+    static_cast<void>(hooks);
+    throw std::logic_error("this integrator cannot be a domain of a run across processes");
+  }
+  /// Doubles per body in pack(): q (dim), p (dim), the frame (ambient x ambient, column-major;
+  /// the identity where the state has no frames).
+  virtual int packed_size() const { return 0; }
+  /// Append the packed state of bodies (in that order) to out.
+  virtual void pack(const std::vector<int>& bodies, std::vector<double>& out) const {
+    static_cast<void>(bodies);
+    static_cast<void>(out);
+  }
+  /// Set bodies' state from packed data (packed_size() doubles each, in bodies' order).
+  virtual void unpack(const std::vector<int>& bodies, const double* in) {
+    static_cast<void>(bodies);
+    static_cast<void>(in);
+  }
+  /// H^n: the cluster frame (sesi::State::cluster) when the bodies are held in one (a domain's
+  /// ranks share it), else an empty matrix; set_cluster puts the bodies in the given one (their
+  /// frames and coordinates are then relative to it).
+  virtual Eigen::MatrixXd cluster() const { return {}; }
+  virtual void set_cluster(const Eigen::MatrixXd& c) { static_cast<void>(c); }
+  /// The bodies' points and velocities in the frame the momentum map is summed in: a cluster
+  /// frame's (before C; sesi::momentum_map), else the world's (points(), velocities()).
+  virtual void frame_points(Eigen::MatrixXd& X, Eigen::MatrixXd& V) {
+    X = points();
+    V = velocities();
+  }
+  /// A momentum map summed in that frame (sesi::momentum_map_of), in world coordinates.
+  virtual Eigen::VectorXd momentum_in_world(const Eigen::VectorXd& m) const { return m; }
+  /// Points of bodies at the last force evaluation (ambient x bodies.size()), in the frame the
+  /// forces see them in (the cluster's on H^n, local_points(), else the world's): a domain's
+  /// moves are measured against them.
+  virtual void kicked_points(const std::vector<int>& bodies, Eigen::MatrixXd& out) {
+    static_cast<void>(bodies);
+    out.resize(0, 0);
+  }
   virtual void restore(const FramedState& state) = 0;
   /// The state the outputs see, of the integrator's kind: framed_state() for a plain method, the
   /// post-processed state for a processed one (whose framed_state() is its kernel's variables).

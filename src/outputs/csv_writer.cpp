@@ -6,6 +6,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include <sesi/parallel.hpp>
+
 #include "output_dir.hpp"
 
 namespace sesi::program {
@@ -40,9 +42,30 @@ CsvWriter::~CsvWriter() {
 }
 
 void CsvWriter::row(std::span<const double> values) {
-  begin_row();
-  for (const double v : values) number(v);
-  end_row();
+  const int n = static_cast<int>(values.size());
+  if (n < parallel_cells) {
+    begin_row();
+    for (const double v : values) number(v);
+    end_row();
+    return;
+  }
+  // A long row (a many-body trajectory's: 7 x 10^5 numbers at 10^5 bodies on S^2, the shortest
+  // round-trip form ~0.1 us each) is formatted in chunks on threads, each into its own buffer,
+  // written in chunk order: the bytes of the loop above, whatever the thread count.
+  const int chunks = sesi::parallel::chunks_for(n);
+  pieces_.resize(static_cast<std::size_t>(chunks));
+  sesi::parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
+    std::vector<char>& piece = pieces_[static_cast<std::size_t>(c)];
+    piece.resize(static_cast<std::size_t>(end - begin) * 33);  // a comma and at most 32 characters each
+    char* at = piece.data();
+    for (int k = begin; k < end; ++k) {
+      if (k > 0) *at++ = ',';
+      at = std::to_chars(at, piece.data() + piece.size(), values[static_cast<std::size_t>(k)]).ptr;
+    }
+    piece.resize(static_cast<std::size_t>(at - piece.data()));
+  });
+  for (const std::vector<char>& piece : pieces_) check(std::fwrite(piece.data(), 1, piece.size(), file_) == piece.size());
+  check(std::fputc('\n', file_) != EOF);
 }
 
 void CsvWriter::begin_row() {

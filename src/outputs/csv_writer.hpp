@@ -45,6 +45,9 @@ class CsvWriter {
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
   std::vector<char> buffer_;
+  /// From this many numbers on, row() formats on threads (into pieces_, one per chunk).
+  static constexpr int parallel_cells = 4096;
+  std::vector<std::vector<char>> pieces_;
   std::size_t used_ = 0;     ///< bytes of the row under construction in buffer_
   bool first_cell_ = true;
 };

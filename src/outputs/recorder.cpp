@@ -262,7 +262,7 @@ std::vector<double> Recorder::max_exact_error() const {
   return exact_ ? exact_->max_error() : std::vector<double>{};
 }
 
-void Recorder::finish(const RunOutcome& outcome, double wall_seconds) {
+void Recorder::finish(const RunOutcome& outcome, double wall_seconds, int ranks) {
   if (trajectory_csv_) trajectory_csv_->close();
 #ifdef SESI_HAVE_HDF5
   if (trajectory_h5md_) trajectory_h5md_->close();
@@ -276,7 +276,7 @@ void Recorder::finish(const RunOutcome& outcome, double wall_seconds) {
     exact.final_position_error = exact_->last_error();
   }
   const long planned = step_count(*scene_.integrator.t_end, *scene_.integrator.dt);
-  const SummaryData data{scene_, outcome, planned, wall_seconds, stats_, final_, exact};
+  const SummaryData data{scene_, outcome, planned, wall_seconds, stats_, final_, exact, ranks};
   write_file_atomically(dir_ / "summary.json", summary_json(data));
 }
 

@@ -57,8 +57,9 @@ class Recorder final : public RunSink {
   void write_row(const Snapshot& s) override;
   /// The last finite state of the run, with velocities (for the summary's final state).
   void set_final(Snapshot last) override;
-  /// Closes the trajectory and CSV files and writes summary.json.
-  void finish(const RunOutcome& outcome, double wall_seconds);
+  /// Closes the trajectory and CSV files and writes summary.json (ranks: the MPI ranks that ran
+  /// the steps, 1 for one process).
+  void finish(const RunOutcome& outcome, double wall_seconds, int ranks = 1);
 
   const InvariantStats& invariants() const { return stats_; }
   /// For a checkpoint: the statistics so far, and the outputs' lengths (flushed to the files).

@@ -191,6 +191,9 @@ std::string summary_json(const SummaryData& d) {
   json.number("wall_seconds", d.wall_seconds);
   // --threads (0: all cores), or fewer for a scene too small to pay for them.
   json.integer("threads_used", threads_used(scene));
+  // The processes and the threads each ran with (--threads per rank; 0 resolved to the cores).
+  json.integer("ranks", d.ranks);
+  json.integer("threads_per_rank", sesi::parallel::threads());
   if (scene.thermostat) write_thermostat(json, *scene.thermostat, inv, d.final_state);
   if (const auto& a = scene.integrator.auto_choice) write_auto(json, *a, inv.max_rel_energy_error);
 

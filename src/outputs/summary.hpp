@@ -51,6 +51,7 @@ struct SummaryData {
   const InvariantStats& invariants;
   const Snapshot& final_state;
   const ExactStats& exact;
+  int ranks = 1;  ///< the MPI ranks that ran the steps (`mpirun -np K sesi run`), 1 for one process
 };
 
 /// summary.json as text.

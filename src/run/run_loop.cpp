@@ -389,13 +389,27 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   // row written after the loop for a state known good between rows).
   long stepped = first;  // the last step taken (the profile's count)
   if (control.profile) sesi::profile::start(sesi::parallel::threads());
+  // Across ranks (RunControl::agree): a check passes when it passes on rank 0; a rank that
+  // judged otherwise drops the failure it recorded (only rank 0's outcome is reported).
+  const auto checked = [&](long k) {
+    if (!control.agree) return passes_checks(k);
+    const RunOutcome before = outcome;
+    const bool mine = passes_checks(k);
+    const bool verdict = control.agree(mine);
+    if (verdict && !mine) outcome = before;
+    return verdict;
+  };
+  const auto interrupted = [&] {
+    const bool mine = control.interrupted && control.interrupted->load(std::memory_order_relaxed);
+    return control.any ? control.any(mine) : mine;
+  };
   for (long k = first + 1; k <= schedule.steps; ++k) {
-    if (control.interrupted && control.interrupted->load(std::memory_order_relaxed)) {
+    if (interrupted()) {
       // The run stops after step k - 1 (finite), checked here if it was not: the stop, the
       // outputs' last row and the checkpoint are all at that one step.
       const long last = k - 1;
       const bool unchecked = good.step != last;
-      if (unchecked && !passes_checks(last)) {
+      if (unchecked && !checked(last)) {
         fail_at(last);
         break;
       }
@@ -452,7 +466,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
       fail_at(k);
       break;
     }
-    if (check && !passes_checks(k)) {
+    if (check && !checked(k)) {
       fail_at(k);
       break;
     }

@@ -83,6 +83,13 @@ struct RunControl {
   std::function<void(const Checkpoint&)> checkpoint;
   /// Profile the steps (sesi::profile; `sesi run --profile`): RunOutcome::profile.
   bool profile = false;
+  /// A run across ranks (docs/parallel.md): rank 0's verdict on every rank (empty: one process).
+  /// The loop passes each check's verdict through it, so that every rank takes the same branch
+  /// and makes the same collective calls on the integrator; rank 0 decides (it has the data).
+  std::function<bool(bool)> agree;
+  /// Whether any rank's value is true (empty: one process): a signal that reached one rank
+  /// stops all of them after the same step.
+  std::function<bool(bool)> any;
 };
 
 /// What RunOutcome::detail says of a non-finite state: "the state became non-finite: body 3's

@@ -6,19 +6,15 @@
 #include <thread>
 #include <vector>
 
+#include "launcher.hpp"
+
 #ifdef SESI_HAVE_MPI
 #include <mpi.h>
 #endif
 
 namespace sesi::program {
 
-long SweepComm::launched_processes() {
-  long most = 1;
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS"}) {
-    if (const char* value = std::getenv(name)) most = std::max(most, std::strtol(value, nullptr, 10));
-  }
-  return most;
-}
+long SweepComm::launched_processes() { return launcher::processes(); }
 
 #ifdef SESI_HAVE_MPI
 
@@ -26,16 +22,6 @@ namespace {
 
 constexpr int tag_work = 1;
 constexpr int tag_result = 2;
-
-/// Whether a launcher started this process as one rank of several: Open MPI's mpirun, or a
-/// PMI/PMIx launcher (srun --mpi=pmix, Hydra). Started by hand, sesi does not initialise MPI, so
-/// a sweep then runs on this machine alone (no singleton start of Open MPI's runtime).
-bool launched_by_mpi() {
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"}) {
-    if (std::getenv(name) != nullptr) return true;
-  }
-  return false;
-}
 
 /// Wait for a message without spinning: Open MPI's blocking receive polls at full speed, and
 /// would take a core from the runs.
@@ -54,7 +40,10 @@ MPI_Status wait_for(int source, int tag) {
 }  // namespace
 
 SweepComm::SweepComm() {
-  if (!launched_by_mpi()) return;
+  // The runs this sweep starts inherit the launcher's environment: they are no ranks of it.
+  launcher::mark_children_not_ranks();
+  // Started by hand (launcher::started_by_mpi), the sweep runs on this machine alone.
+  if (!launcher::started_by_mpi()) return;
   int initialised = 0;
   MPI_Initialized(&initialised);
   if (!initialised) MPI_Init(nullptr, nullptr);
@@ -114,7 +103,7 @@ void SweepComm::abort(int status) const {
 
 #else  // one process
 
-SweepComm::SweepComm() = default;
+SweepComm::SweepComm() { launcher::mark_children_not_ranks(); }  // as above
 SweepComm::~SweepComm() = default;
 int SweepComm::max_over_ranks(int value) const { return value; }
 int SweepComm::from_rank0(int value) const { return value; }

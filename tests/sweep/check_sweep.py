@@ -96,6 +96,7 @@ def outputs(directory):
         if path.name == "summary.json":
             data = json.loads(path.read_text())
             data.pop("wall_seconds")
+            data.pop("threads_per_rank", None)  # a sweep's runs may take --threads 1
             files[path.name] = data
         elif path.name in ("trajectory.csv", "trajectory.h5", "diagnostics.csv", "exact.csv", "checkpoint"):
             files[path.name] = path.read_bytes()

@@ -79,14 +79,16 @@ def scene_text(kind, dim, radius, bodies, method, t_end, dt, output_every):
 
 def threads_outputs(out):
     """Every file of an output directory by name, as bytes, but for what records the thread count
-    or the time: summary.json parsed, without wall_seconds and threads_used; the checkpoint
-    without its first line (its checksum) and its `threads` line (the setting it resumes with)."""
+    or the time: summary.json parsed, without wall_seconds, threads_used and threads_per_rank; the
+    checkpoint without its first line (its checksum) and its `threads` line (the setting it resumes
+    with)."""
     files = {}
     for path in sorted(pathlib.Path(out).iterdir()):
         if path.name == "summary.json":
             data = json.loads(path.read_text())
             data.pop("wall_seconds")
             data.pop("threads_used")
+            data.pop("threads_per_rank")
             files[path.name] = data
         elif path.name == "checkpoint":
             lines = path.read_bytes().split(b"\n")
@@ -137,6 +139,9 @@ def threads_identity(ctx, name, text, kind, radius, bodies):
                   f"{name} on {threads} threads")
         check(summary(outs[threads])["threads_used"] == threads,
               f"{name}: summary.json's threads_used is not {threads}")
+        # One process (no mpirun): one rank, with the --threads given.
+        check((summary(outs[threads])["ranks"], summary(outs[threads])["threads_per_rank"]) == (1, threads),
+              f"{name}: summary.json's ranks and threads_per_rank are not 1 and {threads}")
     expect_rebuilt(outs[1], kind, radius, bodies)
     for threads in (2, 3):
         expect_same_files(outs[threads], outs[1], f"{name}: --threads {threads} against --threads 1")
