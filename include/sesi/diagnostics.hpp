@@ -162,13 +162,14 @@ std::array<typename Sys::Scalar, 2> configurational_sums(const Sys& sys, const t
   typename Sys::StateType::Matrix grad;
   sys.potential_gradient(x, w, grad);
   typename Sys::Chart::Point q(sys.dim()), g(sys.dim());
-  Scalar g2(0);
+  std::vector<Scalar> rows(static_cast<std::size_t>(sys.bodies()));
   for (int b = 0; b < sys.bodies(); ++b) {
     q = x.q.col(b);
     g = grad.col(b);
-    g2 += kinetic_energy(sys.chart(), q, g, Scalar(0.5));
+    rows[static_cast<std::size_t>(b)] = kinetic_energy(sys.chart(), q, g, Scalar(0.5));
   }
-  return {g2, sys.laplacian_sum(x, w)};
+  // (In body order; a domain's over the whole simulation: System::sum_rows.)
+  return {sys.sum_rows(rows), sys.laplacian_sum(x, w)};
 }
 
 /// kT_conf = sum_b |grad_b V|^2 / sum_b Delta_b V at x (k_B = 1; configurational_sums). One

@@ -26,7 +26,7 @@
 ///   Scalar time_step(Scalar dt)             the engine's step h for a time step dt
 ///   bool acts_on_total(), acts_on_bodies()  which hooks run this step
 ///   total(sys, x, ws, h, which)             outer hook over time h, which = 0 (start) or 1 (end)
-///   begin_bodies(n, h); body(chart, b, m, q, p); end_bodies()   the per-body hook, body by body
+///   begin_bodies(n, h); body(chart, b, m, q, p); end_bodies(sys)   the per-body hook, body by body
 ///                                           (on threads: body() writes only body b's data)
 ///   end_step()                              after the step (the stage's step counter)
 ///
@@ -456,7 +456,7 @@ class Composition {
     kept_.keep(sys, x, /*frames_kept=*/reuse);  // (a step changes no frame)
     if constexpr (staged) {
       const profile::Scope thermostat(profile::Phase::thermostat);
-      if (inner) stage_.end_bodies();
+      if (inner) stage_.end_bodies(sys);
       if (outer) stage_.total(sys, x, ws_, dt / Scalar(2), 1);
       stage_.end_step();
     }

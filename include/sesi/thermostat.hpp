@@ -125,6 +125,10 @@ class Thermostat {
     check_temperature(kT);
     params_.kT = kT;
   }
+  /// A domain of a simulation across processes (System::set_domain): body b's noise is keyed by
+  /// keys[b], its index in the whole simulation, so that each body draws the numbers it draws in
+  /// one process (empty, the default: b).
+  void set_body_keys(std::vector<std::uint64_t> keys) { keys_ = std::move(keys); }
   /// The noise's step key: steps done since the start (incremented by every step).
   std::uint64_t step() const { return step_; }
   void set_step(std::uint64_t k) { step_ = k; }
@@ -160,6 +164,7 @@ class Thermostat {
     heat_ = static_cast<Scalar>(saved[1]);
     set_temperature(static_cast<Scalar>(saved[2]));
     nf_ = static_cast<Scalar>(saved[3]);
+    nf_counted_ = false;
     if (chain_) {
       using Saved = std::remove_cvref_t<decltype(chain_->save())>;
       Saved rest;
@@ -185,19 +190,24 @@ class Thermostat {
   }
 
   /// The outer hook for time h (which = 0 at the step's start, 1 at its end): the total kinetic
-  /// energy K (per body into a buffer, summed in body order), the kind's factor s, p <- s p.
+  /// energy K (per body into a buffer, summed in body order: System::sum_rows, a domain's over
+  /// the whole simulation), the kind's factor s, p <- s p.
   template <class Sys, class Workspace>
   void total(const Sys& sys, State<Chart>& x, Workspace& ws, Scalar h, int which) {
     const int n = sys.bodies();
-    nf_ = static_cast<Scalar>(n) * static_cast<Scalar>(sys.dim());
+    if (!nf_counted_) {
+      // N_f = N n over the whole simulation: a sum of n a body (exact in Scalar), once.
+      buffer_.assign(static_cast<std::size_t>(n), static_cast<Scalar>(sys.dim()));
+      nf_ = sys.sum_rows(buffer_);
+      nf_counted_ = true;
+    }
     buffer_.resize(static_cast<std::size_t>(n));
     sys.for_bodies(ws, [&](int b, auto& sc) {
       sc.q = x.q.col(b);
       sc.p = x.p.col(b);
       buffer_[static_cast<std::size_t>(b)] = sesi::kinetic_energy(sys.chart(), sc.q, sc.p, sys.mass(b));
     });
-    Scalar K(0);
-    for (const Scalar k : buffer_) K += k;
+    const Scalar K = sys.sum_rows(buffer_);
     Scalar s(1);
     if (params_.kind == ThermostatKind::nose_hoover) {
       s = chain_->advance(K, nf_, params_.kT, h);
@@ -231,8 +241,8 @@ class Thermostat {
     const int n = static_cast<int>(p.size());
     Scalar dk(0);
     for (int i = 0; i < n; i += 2) {
-      const auto z = random::normal_pair(params_.seed, random::stream::langevin, step_, static_cast<std::uint64_t>(b),
-                                         static_cast<std::uint64_t>(i / 2));
+      const std::uint64_t key = keys_.empty() ? static_cast<std::uint64_t>(b) : keys_[static_cast<std::size_t>(b)];
+      const auto z = random::normal_pair(params_.seed, random::stream::langevin, step_, key, static_cast<std::uint64_t>(i / 2));
       for (int j = i; j < n && j < i + 2; ++j) {
         const Scalar a = chart.kinetic_dp(j, q, Scalar(1), m);
         const Scalar old = p[j];
@@ -243,11 +253,10 @@ class Thermostat {
     }
     buffer_[static_cast<std::size_t>(b)] = dk;
   }
-  /// After the pass: the heat of O, summed in body order.
-  void end_bodies() {
-    Scalar sum(0);
-    for (const Scalar d : buffer_) sum += d;
-    heat_ += sum;
+  /// After the pass: the heat of O, summed in body order (System::sum_rows).
+  template <class Sys>
+  void end_bodies(const Sys& sys) {
+    heat_ += sys.sum_rows(buffer_);
   }
   void end_step() { ++step_; }
 
@@ -259,7 +268,9 @@ class Thermostat {
   ThermostatParams<Scalar> params_;
   std::uint64_t step_ = 0;
   Scalar heat_ = 0;
-  Scalar nf_ = 0;  // N_f = bodies x dim, from the last outer hook (for the chain's extended energy)
+  Scalar nf_ = 0;  // N_f = bodies x dim, from the first outer hook (for the chain's extended energy)
+  bool nf_counted_ = false;  // (counted by every process of a domain alike: a collective sum)
+  std::vector<std::uint64_t> keys_;  // a domain's bodies' noise keys (set_body_keys)
   Scalar c_ = 1, var_ = 0;  // this step's O: c = exp(-gamma h), var = (1 - c^2) kT
   std::vector<Scalar> buffer_;  // per-body kinetic energies or heats, summed in body order
   std::optional<thermostats::NoseHooverChain<Scalar>> chain_;

@@ -1,7 +1,9 @@
 #include "domain_integrator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <limits>
@@ -25,8 +27,7 @@ namespace {
 
 /// What of scene a run across ranks cannot hold yet, or empty.
 std::string unsupported(const Scene& scene) {
-  if (scene.space.has_topology()) return "a space with a topology (a periodic box or a compact surface)";
-  if (scene.thermostat) return "a thermostat";
+  if (scene.space.genus != 0) return "a compact hyperbolic surface (genus)";
   for (const PotentialSpec& spec : scene.potentials) {
     if (std::holds_alternative<CotangentGravitySpec>(spec) || std::holds_alternative<HarmonicPairSpec>(spec) ||
         std::holds_alternative<ChordWellSpec>(spec)) {
@@ -40,25 +41,15 @@ std::string unsupported(const Scene& scene) {
   return {};
 }
 
-/// The chord of a geodesic distance d in the ambient metric: 2 R sin(d / 2R) on S^n (d <= pi R),
-/// the Minkowski chord 2 R sinh(d / 2R) on H^n, d on E^n.
-double chord_of(const SpaceSpec& space, double d) {
-  const double R = space.radius;
-  switch (space.kind) {
-    case SpaceKind::sphere:
-      return 2.0 * R * std::sin(std::min(d, M_PI * R) / (2.0 * R));
-    case SpaceKind::hyperbolic:
-      return 2.0 * R * std::sinh(d / (2.0 * R));
-    case SpaceKind::euclidean:
-      break;
-  }
-  return d;
-}
-
 /// The squared chord of two points in the ambient metric (Euclidean; Minkowski on H^n, whose last
-/// coordinate is time), a monotone function of their distance.
+/// coordinate is time), a monotone function of their distance; in a periodic box, of the nearest
+/// images (a body wrapped into the box moved by less than its jump).
 double chord2(const SpaceSpec& space, const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
-  const Eigen::VectorXd u = x - y;
+  Eigen::VectorXd u = x - y;
+  for (std::size_t k = 0; k < space.box.size(); ++k) {
+    const double L = space.box[k];
+    u[static_cast<Eigen::Index>(k)] -= L * std::nearbyint(u[static_cast<Eigen::Index>(k)] / L);
+  }
   if (space.kind != SpaceKind::hyperbolic) return u.squaredNorm();
   const Eigen::Index t = u.size() - 1;
   return u.head(t).squaredNorm() - u[t] * u[t];
@@ -72,11 +63,15 @@ struct Slabs {
   std::vector<int> owner;   // by body
   std::vector<double> lo, hi;
   double halo = 0.0;
-  /// Whether rank r holds body b (as its own or in its halo).
+  double period = 0.0;  // a periodic box's edge along the axis (0: none)
+  /// Whether rank r holds body b (as its own or in its halo): within the halo of its slab, or in a
+  /// box of one of the slab's images a period away.
   bool holds(int r, int b) const {
+    if (owner[static_cast<std::size_t>(b)] == r) return true;
     const double k = key[static_cast<std::size_t>(b)];
-    return owner[static_cast<std::size_t>(b)] == r ||
-           (k >= lo[static_cast<std::size_t>(r)] - halo && k <= hi[static_cast<std::size_t>(r)] + halo);
+    const double l = lo[static_cast<std::size_t>(r)] - halo, h = hi[static_cast<std::size_t>(r)] + halo;
+    if (k >= l && k <= h) return true;
+    return period > 0.0 && ((k + period >= l && k + period <= h) || (k - period >= l && k - period <= h));
   }
 };
 
@@ -96,16 +91,21 @@ Slabs cut(const SpaceSpec& space, const Eigen::MatrixXd& X, int ranks, double ha
   const int axes = static_cast<int>(X.rows()) - (hyperbolic ? 1 : 0);
   double widest = -1.0;
   for (int r = 0; r < axes; ++r) {
-    const double extent = X.row(r).maxCoeff() - X.row(r).minCoeff();
+    // (A periodic box: its longest edge, the first of equals.)
+    const double extent = space.box.empty() ? X.row(r).maxCoeff() - X.row(r).minCoeff()
+                                            : space.box[static_cast<std::size_t>(r)];
     if (extent > widest) {  // (NaN: not taken)
       widest = extent;
       s.axis = r;
     }
   }
+  if (!space.box.empty()) s.period = space.box[static_cast<std::size_t>(s.axis)];
   s.key.resize(static_cast<std::size_t>(n));
   for (int b = 0; b < n; ++b) {
     double k = X(s.axis, b);
     if (hyperbolic) k = space.radius * std::asinh(k / space.radius);
+    // A box: the coordinate in [0, L) (a body may be out of the box until the bodies are wrapped).
+    if (s.period > 0.0) k -= s.period * std::floor(k / s.period);
     s.key[static_cast<std::size_t>(b)] = std::isnan(k) ? std::numeric_limits<double>::infinity() : k;
   }
   std::vector<int> order(static_cast<std::size_t>(n));
@@ -131,8 +131,14 @@ class DomainIntegrator final : public Integrator {
  public:
   DomainIntegrator(const Scene& scene, const Ranks& ranks)
       : scene_(scene), ranks_(ranks), geometry_(scene.space), n_(scene.body_count()) {
-    shape_ = scene;
-    shape_.bodies.clear();
+    // (Member by member: a copy of the whole scene would copy its bodies once more.)
+    shape_.name = scene.name;
+    shape_.source = scene.source;
+    shape_.space = scene.space;
+    shape_.potentials = scene.potentials;
+    shape_.integrator = scene.integrator;
+    shape_.exact = scene.exact;
+    shape_.thermostat = scene.thermostat;
     double cutoff = 0.0;
     for (const PotentialSpec& spec : scene.potentials) {
       if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) cutoff = std::max(cutoff, lj->cutoff);
@@ -142,7 +148,7 @@ class DomainIntegrator final : public Integrator {
     // integrator starts again), so the slabs are cut half as often, for a halo 2 skins wider.
     const double skin = 2.0 * std::max(scene.integrator.neighbour_skin, sesi::default_skin_fraction) * cutoff;
     halo_width_ = cutoff > 0.0 ? cutoff + 2.0 * skin : 0.0;
-    const double half = chord_of(scene.space, 0.5 * skin), whole = chord_of(scene.space, skin);
+    const double half = geometry_.chord_of_distance(0.5 * skin), whole = geometry_.chord_of_distance(skin);
     recut2_ = cutoff > 0.0 ? half * half : std::numeric_limits<double>::infinity();
     broken2_ = cutoff > 0.0 ? whole * whole : std::numeric_limits<double>::infinity();
     skin_ = skin;
@@ -206,22 +212,36 @@ class DomainIntegrator final : public Integrator {
   }
   double energy() override { return local_->energy(); }
   Eigen::VectorXd momentum_map() override {
-    // As sesi::momentum_map: summed by rank 0 over all bodies in body order, in the frame the
-    // bodies are held in (a cluster frame's on H^n), then taken to the world.
+    // As sesi::momentum_map, in the frame the bodies are held in (a cluster frame's on H^n), then
+    // taken to the world. Each component is a sum over bodies in body order of one term a body
+    // (sesi::momentum_map_of): each rank forms its own bodies' terms, and the sums go through the
+    // domain's sum (rank 0, body order: one process's bits), so no rank holds every body's point.
     Eigen::MatrixXd lx, lv;
     local_->frame_points(lx, lv);
-    const Eigen::MatrixXd X = gathered(lx), V = gathered(lv);
-    std::vector<double> m;
-    if (ranks_.root()) {
-      const Eigen::VectorXd out = local_->momentum_in_world(sesi::momentum_map_of(
-          X, V, [&](int b) { return scene_.bodies[static_cast<std::size_t>(b)].mass; },
-          scene_.space.kind == SpaceKind::euclidean));
-      m.assign(out.data(), out.data() + out.size());
+    const bool translations = scene_.space.kind == SpaceKind::euclidean;
+    std::vector<std::vector<double>> terms;  // by component: a row a local body (0 in the halo)
+    Eigen::MatrixXd x(lx.rows(), 1), v(lv.rows(), 1);
+    for (const int l : own_) {
+      x = lx.col(l);
+      v = lv.col(l);
+      const double m = scene_.bodies[static_cast<std::size_t>(ids_[static_cast<std::size_t>(l)])].mass;
+      // (One body's map: 0 + its term, the term itself; a sum from +0 never meets -0.)
+      const Eigen::VectorXd term = sesi::momentum_map_of(x, v, [m](int) { return m; }, translations);
+      if (terms.empty()) terms.assign(static_cast<std::size_t>(term.size()), std::vector<double>(ids_.size(), 0.0));
+      for (Eigen::Index k = 0; k < term.size(); ++k) terms[static_cast<std::size_t>(k)][static_cast<std::size_t>(l)] = term[k];
     }
-    ranks_.from_root(m);
-    return Eigen::Map<const Eigen::VectorXd>(m.data(), static_cast<Eigen::Index>(m.size()));
+    // (A rank owns at least one body: every rank has the components.)
+    Eigen::VectorXd out(static_cast<Eigen::Index>(terms.size()));
+    for (std::size_t k = 0; k < terms.size(); ++k) out[static_cast<Eigen::Index>(k)] = sum(terms[k]);
+    return local_->momentum_in_world(out);
   }
   Eigen::MatrixXd points() override { return gathered(local_->points()); }
+  Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic> image_counts() const override {
+    const auto local = local_->image_counts();
+    if (local.size() == 0) return {};
+    return gathered(local.cast<double>()).cast<std::int64_t>();  // (exact below 2^53)
+  }
+  Eigen::MatrixXd unwrapped_points() override { return gathered(local_->unwrapped_points()); }
   Eigen::MatrixXd velocities() override { return gathered(local_->velocities()); }
   // (The cluster frame is the same on every rank: each re-centres alike, from the same sums.)
   bool clustered() const override { return local_->clustered(); }
@@ -248,32 +268,44 @@ class DomainIntegrator final : public Integrator {
     return true;
   }
   FramedState framed_state() const override {
-    std::vector<double> mine, all;
-    std::vector<int> counts;
-    local_->pack(own_, mine);
-    ranks_.gather(mine, all, counts);
+    // Each piece of this rank's state, its own bodies' columns gathered by rank 0 in body order.
+    const FramedState mine = local_->framed_state();
     FramedState out;
-    if (!ranks_.root()) return out;
-    const int d = scene_.dim(), a = geometry_.ambient_dim(), stride = local_->packed_size();
-    out.q.resize(d, n_);
-    out.p.resize(d, n_);
-    if (framed_) out.frames.resize(static_cast<std::size_t>(n_));
-    const Eigen::MatrixXd c = local_->cluster();
-    out.clustered = c.size() != 0;
-    if (out.clustered) out.cluster = c;
-    std::size_t at = 0;
-    for (const std::vector<int>& ids : owned_ids_) {
-      for (const int b : ids) {
-        const double* in = all.data() + at;
-        for (int i = 0; i < d; ++i) out.q(i, b) = in[i];
-        for (int i = 0; i < d; ++i) out.p(i, b) = in[d + i];
-        if (framed_) out.frames[static_cast<std::size_t>(b)] = Eigen::Map<const Eigen::MatrixXd>(in + 2 * d, a, a);
-        at += static_cast<std::size_t>(stride);
+    out.q = gathered(mine.q);
+    out.p = gathered(mine.p);
+    const int a = geometry_.ambient_dim();
+    if (framed_) {
+      // (A state without frames: each at the identity, as ChartIntegrator::pack writes them.)
+      const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(a, a);
+      Eigen::MatrixXd frames(a * a, static_cast<Eigen::Index>(ids_.size()));
+      for (std::size_t b = 0; b < ids_.size(); ++b) {
+        frames.col(static_cast<Eigen::Index>(b)) = (mine.frames.empty() ? identity : mine.frames[b]).reshaped();
       }
+      frames = gathered(frames);
+      for (Eigen::Index b = 0; b < frames.cols(); ++b) out.frames.push_back(frames.col(b).reshaped(a, a));
     }
+    if (mine.image_counts.size() != 0) {
+      out.image_counts = gathered(mine.image_counts.cast<double>()).cast<std::int64_t>();  // (exact below 2^53)
+    }
+    out.clustered = mine.clustered;
+    if (mine.clustered) out.cluster = mine.cluster;
+    out.thermostat = mine.thermostat;  // (the same on every rank)
+    if (!ranks_.root()) return FramedState{};
     return out;
   }
   void restore(const FramedState& state) override { take(state); }
+  // A thermostat: each rank's is the same (it sees the whole simulation's sums, and its bodies'
+  // noise is keyed by their indices in it: ChartIntegrator::set_domain).
+  bool thermostatted() const override { return local_->thermostatted(); }
+  void set_temperature(double kT) override { local_->set_temperature(kT); }
+  std::vector<double> thermostat_state() const override { return local_->thermostat_state(); }
+  void set_thermostat_state(const std::vector<double>& saved) override { local_->set_thermostat_state(saved); }
+  std::uint64_t thermostat_step() const override { return local_->thermostat_step(); }
+  void set_thermostat_step(std::uint64_t k) override { local_->set_thermostat_step(k); }
+  double heat() const override { return local_->heat(); }
+  double conserved_offset() const override { return local_->conserved_offset(); }
+  double kinetic_temperature() override { return local_->kinetic_temperature(); }
+  std::array<double, 2> configurational_sums() override { return local_->configurational_sums(); }
   FramedState shown_state() const override { return framed_state(); }
   void start_from(const FramedState& state) override { take(state); }
   int body_with_non_finite_energy() override { return first_body(local_->body_with_non_finite_energy()); }
@@ -370,36 +402,45 @@ class DomainIntegrator final : public Integrator {
   void recut() {
     const int a = geometry_.ambient_dim(), stride = local_->packed_size();
     cluster_ = local_->cluster();  // (the next integrator's bodies stay in it)
+    const std::vector<double> thermostat = local_->thermostat_state();
     // Every rank's bodies' points (at the last force evaluation) with their indices, to all.
-    std::vector<double> mine, all;
-    std::vector<int> counts;
-    mine.reserve(own_.size() * static_cast<std::size_t>(a + 1));
-    for (std::size_t k = 0; k < own_.size(); ++k) {
-      mine.push_back(ids_[static_cast<std::size_t>(own_[k])]);
-      mine.insert(mine.end(), moved_.col(static_cast<Eigen::Index>(k)).data(),
-                  moved_.col(static_cast<Eigen::Index>(k)).data() + a);
-    }
-    ranks_.all_gather(mine, all, counts);
     Eigen::MatrixXd X(a, n_);
-    for (std::size_t at = 0; at < all.size(); at += static_cast<std::size_t>(a + 1)) {
-      X.col(static_cast<Eigen::Index>(all[at])) = Eigen::Map<const Eigen::VectorXd>(all.data() + at + 1, a);
+    {
+      std::vector<double> mine, all;
+      std::vector<int> counts;
+      mine.reserve(own_.size() * static_cast<std::size_t>(a + 1));
+      for (std::size_t k = 0; k < own_.size(); ++k) {
+        mine.push_back(ids_[static_cast<std::size_t>(own_[k])]);
+        mine.insert(mine.end(), moved_.col(static_cast<Eigen::Index>(k)).data(),
+                    moved_.col(static_cast<Eigen::Index>(k)).data() + a);
+      }
+      ranks_.all_gather(mine, all, counts);
+      for (std::size_t at = 0; at < all.size(); at += static_cast<std::size_t>(a + 1)) {
+        X.col(static_cast<Eigen::Index>(all[at])) = Eigen::Map<const Eigen::VectorXd>(all.data() + at + 1, a);
+      }
     }
     Slabs next = cut(scene_.space, X, ranks_.size(), halo_width_);
     // Each body's state from its owner now to every rank that holds it next: [index, packed].
-    std::vector<double> packed;
-    local_->pack(own_, packed);
     for (int r = 0; r < ranks_.size(); ++r) send_[static_cast<std::size_t>(r)].clear();
-    for (std::size_t k = 0; k < own_.size(); ++k) {
-      const int b = ids_[static_cast<std::size_t>(own_[k])];
-      const double* state = packed.data() + k * static_cast<std::size_t>(stride);
-      for (int r = 0; r < ranks_.size(); ++r) {
-        if (!next.holds(r, b)) continue;
-        std::vector<double>& out = send_[static_cast<std::size_t>(r)];
-        out.push_back(b);
-        out.insert(out.end(), state, state + stride);
+    {
+      std::vector<double> packed;
+      local_->pack(own_, packed);
+      for (std::size_t k = 0; k < own_.size(); ++k) {
+        const int b = ids_[static_cast<std::size_t>(own_[k])];
+        const double* state = packed.data() + k * static_cast<std::size_t>(stride);
+        for (int r = 0; r < ranks_.size(); ++r) {
+          if (!next.holds(r, b)) continue;
+          std::vector<double>& out = send_[static_cast<std::size_t>(r)];
+          out.push_back(b);
+          out.insert(out.end(), state, state + stride);
+        }
       }
     }
+    // The old integrator is done with (its bodies' states are in send_): freed before the new
+    // one is built, so that a rank never holds both (memory: issue #27's 10^6 bodies).
+    local_.reset();
     ranks_.exchange(send_, received_);
+    release(send_);
     // (In body order: the new local order.)
     std::vector<std::pair<int, const double*>> arrived;
     for (const std::vector<double>& in : received_) {
@@ -411,13 +452,21 @@ class DomainIntegrator final : public Integrator {
     std::vector<double> state;
     state.reserve(arrived.size() * static_cast<std::size_t>(stride));
     for (const auto& entry : arrived) state.insert(state.end(), entry.second, entry.second + stride);
+    arrived = {};
+    release(received_);
     begin(std::move(next), X, &state);
+    local_->set_thermostat_state(thermostat);
+  }
+  /// Empty the blocks and give their memory back (a cut's blocks hold every body's state; a
+  /// step's halo blocks, which reuse them, a small part).
+  static void release(std::vector<std::vector<double>>& blocks) {
+    for (std::vector<double>& block : blocks) std::vector<double>().swap(block);
   }
 
   /// Every rank passes the same whole state (a checkpoint's): each takes its bodies from it.
   void take(const FramedState& state) {
-    if (state.embedded || !state.thermostat.empty() || state.image_counts.size() != 0 ||
-        !state.words.empty() || state.q.cols() != n_ || state.p.cols() != n_ ||
+    if (state.embedded || !state.words.empty() || state.q.cols() != n_ || state.p.cols() != n_ ||
+        (state.image_counts.size() != 0 && state.image_counts.cols() != n_) ||
         (!state.frames.empty() && state.frames.size() != static_cast<std::size_t>(n_))) {
       throw std::logic_error("the state to restore across ranks is not of this run");
     }
@@ -428,26 +477,30 @@ class DomainIntegrator final : public Integrator {
       X.col(b) = state.frames.empty() ? x : Eigen::VectorXd(state.frames[static_cast<std::size_t>(b)] * x);
     }
     Slabs slabs = cut(scene_.space, X, ranks_.size(), halo_width_);
-    std::vector<double> packed;
-    const int d = scene_.dim();
+    // The columns of the bodies this rank holds, in body order: its integrator restores them.
+    std::vector<Eigen::Index> held;
     for (int b = 0; b < n_; ++b) {
-      if (!slabs.holds(ranks_.rank(), b)) continue;
-      for (int i = 0; i < d; ++i) packed.push_back(state.q(i, b));
-      for (int i = 0; i < d; ++i) packed.push_back(state.p(i, b));
-      for (int c = 0; c < a; ++c) {
-        for (int r = 0; r < a; ++r) {
-          packed.push_back(state.frames.empty() ? (r == c ? 1.0 : 0.0) : state.frames[static_cast<std::size_t>(b)](r, c));
-        }
-      }
+      if (slabs.holds(ranks_.rank(), b)) held.push_back(b);
     }
+    FramedState mine;
+    mine.q = state.q(Eigen::all, held);
+    mine.p = state.p(Eigen::all, held);
+    for (const Eigen::Index b : held) {
+      if (!state.frames.empty()) mine.frames.push_back(state.frames[static_cast<std::size_t>(b)]);
+    }
+    if (state.image_counts.size() != 0) mine.image_counts = state.image_counts(Eigen::all, held);
+    mine.clustered = state.clustered;
+    if (state.clustered) mine.cluster = state.cluster;
+    mine.thermostat = state.thermostat;
     cluster_ = state.clustered ? state.cluster : Eigen::MatrixXd();
-    begin(std::move(slabs), X, &packed);
+    begin(std::move(slabs), X, nullptr, &mine);
   }
 
   /// Start a cut: this rank's bodies (its own and its halo, in body order), the exchange plans,
-  /// the integrator of its bodies (from the scene's initial state, or the packed states given in
-  /// body order), the points the next moves are measured from.
-  void begin(Slabs slabs, const Eigen::MatrixXd& X, const std::vector<double>* packed) {
+  /// the integrator of its bodies (from the scene's initial state, the packed states given in
+  /// body order, or the state of those bodies held), the points the next moves are measured from.
+  void begin(Slabs slabs, const Eigen::MatrixXd& X, const std::vector<double>* packed,
+             const FramedState* held = nullptr) {
     const int me = ranks_.rank(), K = ranks_.size();
     ids_.clear();
     own_.clear();
@@ -482,16 +535,42 @@ class DomainIntegrator final : public Integrator {
     }
     moved_ = start_;
 
+    // Its bodies: the scene's initial conditions at the start, the held state's (restored with
+    // its frames below), or the packed states' (q and p first: ChartIntegrator::pack), which
+    // unpack() then puts in place with their frames. (After the start the scene's q and p are
+    // released: run_command.cpp.)
     Scene local = shape_;
-    local.bodies.reserve(ids_.size());
-    for (const int b : ids_) local.bodies.push_back(scene_.bodies[static_cast<std::size_t>(b)]);
+    local.bodies.resize(ids_.size());
+    const int d = scene_.dim(), stride = packed ? static_cast<int>(packed->size() / std::max<std::size_t>(ids_.size(), 1)) : 0;
+    for (std::size_t k = 0; k < ids_.size(); ++k) {
+      Body& body = local.bodies[k];
+      const Body& given = scene_.bodies[static_cast<std::size_t>(ids_[k])];
+      body.mass = given.mass;
+      if (held) {
+        body.q = held->q.col(static_cast<Eigen::Index>(k));
+        body.p = held->p.col(static_cast<Eigen::Index>(k));
+        continue;
+      }
+      if (!packed) {
+        body.q = given.q;
+        body.p = given.p;
+        continue;
+      }
+      const double* state = packed->data() + k * static_cast<std::size_t>(stride);
+      body.q = Eigen::Map<const Eigen::VectorXd>(state, d);
+      body.p = Eigen::Map<const Eigen::VectorXd>(state + d, d);
+    }
     local_.reset();
     local_ = make_integrator(local);
     DomainHooks hooks;
     hooks.halo = halo_;
     hooks.drifted = [this](double* q, int dim, int) { refresh_positions(q, dim); };
     hooks.sum = [this](const std::vector<double>& rows) { return sum(rows); };
+    hooks.ids = ids_;
+    hooks.bodies = n_;
+    hooks.any = [this](bool value) { return ranks_.any(value); };
     local_->set_domain(std::move(hooks));
+    if (held) local_->restore(*held);
     if (packed) {
       std::vector<int> all(ids_.size());
       std::iota(all.begin(), all.end(), 0);

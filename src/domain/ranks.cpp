@@ -68,6 +68,43 @@ void offsets(const std::vector<int>& counts, std::vector<int>& displacements) {
   static_cast<void>(count_of(static_cast<std::size_t>(at)));
 }
 
+/// Each rank's doubles, in rank order, to rank 0 (everyone false: MPI_Gatherv) or to every rank
+/// (MPI_Allgatherv), with each rank's count; elsewhere all and counts are left empty.
+void gather_doubles(int size, bool root, bool everyone, const std::vector<double>& mine, std::vector<double>& all,
+                    std::vector<int>& counts) {
+  if (size < 2) {
+    all = mine;
+    counts.assign(1, count_of(mine.size()));
+    return;
+  }
+  const bool receives = everyone || root;
+  const int n = count_of(mine.size());
+  if (receives) {
+    counts.resize(static_cast<std::size_t>(size));
+  } else {
+    counts.clear();
+  }
+  static thread_local std::vector<int> displacements;
+  if (everyone) {
+    MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  } else {
+    MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+  }
+  if (receives) {
+    offsets(counts, displacements);
+    all.resize(static_cast<std::size_t>(displacements.back()) + static_cast<std::size_t>(counts.back()));
+  } else {
+    all.clear();
+  }
+  if (everyone) {
+    MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displacements.data(), MPI_DOUBLE,
+                   MPI_COMM_WORLD);
+  } else {
+    MPI_Gatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displacements.data(), MPI_DOUBLE, 0,
+                MPI_COMM_WORLD);
+  }
+}
+
 }  // namespace
 
 Ranks Ranks::start() {
@@ -145,43 +182,11 @@ void Ranks::from_root(std::string& text) const {
 }
 
 void Ranks::gather(const std::vector<double>& mine, std::vector<double>& all, std::vector<int>& counts) const {
-  if (size_ < 2) {
-    all = mine;
-    counts.assign(1, count_of(mine.size()));
-    return;
-  }
-  const int n = count_of(mine.size());
-  if (root()) {
-    counts.resize(static_cast<std::size_t>(size_));
-  } else {
-    counts.clear();
-  }
-  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
-  static thread_local std::vector<int> displacements;
-  if (root()) {
-    offsets(counts, displacements);
-    all.resize(static_cast<std::size_t>(displacements.back()) + static_cast<std::size_t>(counts.back()));
-  } else {
-    all.clear();
-  }
-  MPI_Gatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displacements.data(), MPI_DOUBLE, 0,
-              MPI_COMM_WORLD);
+  gather_doubles(size_, root(), false, mine, all, counts);
 }
 
 void Ranks::all_gather(const std::vector<double>& mine, std::vector<double>& all, std::vector<int>& counts) const {
-  if (size_ < 2) {
-    all = mine;
-    counts.assign(1, count_of(mine.size()));
-    return;
-  }
-  const int n = count_of(mine.size());
-  counts.resize(static_cast<std::size_t>(size_));
-  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  static thread_local std::vector<int> displacements;
-  offsets(counts, displacements);
-  all.resize(static_cast<std::size_t>(displacements.back()) + static_cast<std::size_t>(counts.back()));
-  MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displacements.data(), MPI_DOUBLE,
-                 MPI_COMM_WORLD);
+  gather_doubles(size_, root(), true, mine, all, counts);
 }
 
 void Ranks::exchange(const std::vector<std::vector<double>>& send, std::vector<std::vector<double>>& received) const {
@@ -215,6 +220,11 @@ void Ranks::exchange(const std::vector<std::vector<double>>& send, std::vector<s
     const auto from = incoming.begin() + receive_offsets[r];
     received[r].assign(from, from + receive_counts[r]);
   }
+  // A domain's cut sends every body's state once (0.1 GB at 10^6 bodies); the halo exchanges of
+  // each step, a small part of it: the buffers do not keep a cut's size.
+  constexpr std::size_t kept = std::size_t{1} << 20;  // doubles (8 MB)
+  if (outgoing.capacity() > kept) std::vector<double>().swap(outgoing);
+  if (incoming.capacity() > kept) std::vector<double>().swap(incoming);
 }
 
 void Ranks::abort(int status) const {

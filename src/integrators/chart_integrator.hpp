@@ -126,7 +126,7 @@ class ChartIntegrator final : public Integrator {
 
   void step(double t, double h) override {
     stepper_->step(x_, t, h);
-    if constexpr (topology) sesi::wrap(sys_, x_, images_, margin_);  // a thermostat's step too
+    if constexpr (topology) wrap();  // a thermostat's step too
     shown_valid_ = false;
     if (dt_ == 0.0) dt_ = h;  // a processed method's step, when the scene has none
   }
@@ -143,6 +143,8 @@ class ChartIntegrator final : public Integrator {
     t.set_temperature(kT);
     if (t.kind() == sesi::ThermostatKind::nose_hoover) schedule_jumps_ += t.conserved_offset() - before;
   }
+  std::vector<double> thermostat_state() const override { return with_thermostat(FramedState{}).thermostat; }
+  void set_thermostat_state(const std::vector<double>& saved) override { load_thermostat(saved, true); }
   std::uint64_t thermostat_step() const override { return thermostat_ ? thermostat_->thermostat().step() : 0; }
   void set_thermostat_step(std::uint64_t k) override {
     if (thermostat_) thermostat_->thermostat().set_step(k);
@@ -153,7 +155,8 @@ class ChartIntegrator final : public Integrator {
   }
   double kinetic_temperature() override {
     // N_f = N n: every chart momentum is a degree of freedom (no constraint removes one).
-    const double dof = static_cast<double>(sys_.bodies()) * static_cast<double>(sys_.dim());
+    const double dof = static_cast<double>(whole_bodies_ > 0 ? whole_bodies_ : sys_.bodies()) *
+                       static_cast<double>(sys_.dim());
     return 2.0 * sys_.kinetic_energy(shown()) / dof;
   }
   std::array<double, 2> configurational_sums() override {
@@ -290,9 +293,14 @@ class ChartIntegrator final : public Integrator {
     }
   }
   void set_domain(DomainHooks hooks) override {
-    if (stepper_->processed() || thermostat_ || !stepper_->workspace()) {
+    if (stepper_->processed() || !stepper_->workspace()) {
       throw std::logic_error("a domain of a run across processes needs a plain chart method");
     }
+    if (thermostat_) {
+      thermostat_->thermostat().set_body_keys(std::vector<std::uint64_t>(hooks.ids.begin(), hooks.ids.end()));
+    }
+    whole_bodies_ = hooks.bodies;
+    any_ = std::move(hooks.any);
     halo_ = std::move(hooks.halo);
     auto refresh = std::move(hooks.drifted);
     sys_.set_domain(std::move(hooks.sum), [this, refresh](sesi::State<Chart>& x, typename SystemOf<Chart>::Workspace& w) {
@@ -302,7 +310,7 @@ class ChartIntegrator final : public Integrator {
   }
   int packed_size() const override {
     const int a = sys_.ambient_dim();
-    return 2 * sys_.dim() + a * a;
+    return 2 * sys_.dim() + a * a + (topology && !surface ? sys_.dim() : 0);
   }
   void pack(const std::vector<int>& bodies, std::vector<double>& out) const override {
     const int d = sys_.dim(), a = sys_.ambient_dim();
@@ -314,6 +322,9 @@ class ChartIntegrator final : public Integrator {
           out.push_back(x_.framed() ? x_.frames[static_cast<std::size_t>(b)](r, c) : (r == c ? 1.0 : 0.0));
         }
       }
+      if constexpr (topology && !surface) {
+        for (int i = 0; i < d; ++i) out.push_back(static_cast<double>(images_(i, b)));  // (exact below 2^53)
+      }
     }
   }
   void unpack(const std::vector<int>& bodies, const double* in) override {
@@ -323,6 +334,9 @@ class ChartIntegrator final : public Integrator {
       for (int i = 0; i < d; ++i) x_.p(i, b) = *in++;
       const Eigen::Map<const Eigen::MatrixXd> frame(in, a, a);
       in += a * a;
+      if constexpr (topology && !surface) {
+        for (int i = 0; i < d; ++i) images_(i, b) = static_cast<std::int64_t>(*in++);
+      }
       if (!x_.framed()) {
         if (frame.isIdentity(0.0)) continue;
         x_.enable_frames(a);
@@ -472,14 +486,35 @@ class ChartIntegrator final : public Integrator {
     // A state without a thermostat's (an NVE run's) leaves this thermostat as it is: at its start.
     // Another integrator's (start_from: Python's sim.thermostat or sim.method changed) goes on
     // only if it is of the same shape (a chain's variables are not another kind's).
-    if (thermostat_ && !state.thermostat.empty() &&
-        (strict || state.thermostat.size() == thermostat_->thermostat().save().size() + 1)) {
-      std::vector<double> saved = state.thermostat;
+    load_thermostat(state.thermostat, strict);
+    shown_valid_ = false;
+  }
+  /// After a step: a topology's bodies back into its domain (sesi::wrap). A domain of a box
+  /// wraps when any body of the whole simulation is out by more than the margin, as one process
+  /// does (then every body out by any amount, the halo's alike with its owners').
+  void wrap() {
+    if constexpr (topology) {
+      if constexpr (!surface) {
+        if (any_) {
+          const auto& topo = sys_.chart().topology();
+          bool far = false;
+          for (int b = 0; b < x_.bodies() && !far; ++b) far = topo.outside(x_.q.col(b)) > margin_;
+          if (any_(far)) sesi::wrap(sys_, x_, images_, -1.0);
+          return;
+        }
+      }
+      sesi::wrap(sys_, x_, images_, margin_);
+    }
+  }
+  /// with_thermostat's record into the thermostat (none: it stays as it is); not strict, only
+  /// one of the same shape.
+  void load_thermostat(const std::vector<double>& state, bool strict) {
+    if (thermostat_ && !state.empty() && (strict || state.size() == thermostat_->thermostat().save().size() + 1)) {
+      std::vector<double> saved = state;
       schedule_jumps_ = saved.back();
       saved.pop_back();
       thermostat_->thermostat().load(saved);
     }
-    shown_valid_ = false;
   }
   static bool same_state(const sesi::State<Chart>& a, const sesi::State<Chart>& b) {
     const auto same = [](const auto& u, const auto& v) {
@@ -521,6 +556,8 @@ class ChartIntegrator final : public Integrator {
   typename SystemOf<Chart>::Workspace w_ = sys_.make_workspace();  // the diagnostics' own
   std::vector<std::vector<std::pair<int, int>>> close_;  // listed_close_pairs' buffers, per chunk
   std::vector<int> halo_;  // a domain's halo (set_domain)
+  int whole_bodies_ = 0;   // a domain's whole simulation's body count (set_domain; 0: none)
+  std::function<bool(bool)> any_;  // a domain's "on any process" (set_domain)
   // Processed methods (AnyStepper::processed): the step of the kernel's variables in
   // framed_state (the scene's), the initial state, and the post-processed state (shown()).
   double dt_ = 0.0;

@@ -52,6 +52,11 @@ struct DomainHooks {
   std::function<void(double* q, int dim, int bodies)> drifted;
   /// A sum over bodies of one value a body (rows), the whole simulation's, in its body order.
   std::function<double(const std::vector<double>&)> sum;
+  /// Each body's index in the whole simulation (a thermostat's noise key), and its body count.
+  std::vector<int> ids;
+  int bodies = 0;
+  /// Whether value holds on any process (a periodic box's wrap is the whole simulation's call).
+  std::function<bool(bool)> any;
 };
 
 class Integrator {
@@ -165,6 +170,10 @@ class Integrator {
   virtual bool thermostatted() const { return false; }
   /// The thermostat's target kT from the next step on.
   virtual void set_temperature(double kT) { static_cast<void>(kT); }
+  /// The thermostat's own state (sesi::Thermostat::save and the integrator's), for another
+  /// integrator of the same scene to go on with (a domain's after a cut); empty without one.
+  virtual std::vector<double> thermostat_state() const { return {}; }
+  virtual void set_thermostat_state(const std::vector<double>& saved) { static_cast<void>(saved); }
   /// The noise's step key: the steps done since the run's start.
   virtual std::uint64_t thermostat_step() const { return 0; }
   virtual void set_thermostat_step(std::uint64_t k) { static_cast<void>(k); }

@@ -13,14 +13,20 @@
 namespace sesi::program {
 
 CsvWriter::CsvWriter(const std::filesystem::path& path, const std::vector<std::string>& header)
-    : path_(path), buffer_(1 << 16) {
+    : CsvWriter(path, [&](const std::function<void(std::string_view)>& emit) {
+        for (const std::string& name : header) emit(name);
+      }) {}
+
+CsvWriter::CsvWriter(const std::filesystem::path& path, const HeaderNames& header) : path_(path), buffer_(1 << 16) {
   file_ = std::fopen(path.c_str(), "w");
   check(file_ != nullptr);
   std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
-  for (std::size_t k = 0; k < header.size(); ++k) {
-    if (k > 0) std::fputc(',', file_);
-    std::fputs(header[k].c_str(), file_);
-  }
+  bool first = true;
+  header([&](std::string_view name) {
+    if (!first) std::fputc(',', file_);
+    first = false;
+    std::fwrite(name.data(), 1, name.size(), file_);
+  });
   check(std::fputc('\n', file_) != EOF);
 }
 
@@ -42,30 +48,44 @@ CsvWriter::~CsvWriter() {
 }
 
 void CsvWriter::row(std::span<const double> values) {
+  begin_row();
+  numbers(values);
+  end_row();
+}
+
+void CsvWriter::numbers(std::span<const double> values) {
   const int n = static_cast<int>(values.size());
   if (n < parallel_cells) {
-    begin_row();
     for (const double v : values) number(v);
-    end_row();
     return;
   }
-  // A long row (a many-body trajectory's: 7 x 10^5 numbers at 10^5 bodies on S^2, the shortest
-  // round-trip form ~0.1 us each) is formatted in chunks on threads, each into its own buffer,
-  // written in chunk order: the bytes of the loop above, whatever the thread count.
-  const int chunks = sesi::parallel::chunks_for(n);
-  pieces_.resize(static_cast<std::size_t>(chunks));
-  sesi::parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
-    std::vector<char>& piece = pieces_[static_cast<std::size_t>(c)];
-    piece.resize(static_cast<std::size_t>(end - begin) * 33);  // a comma and at most 32 characters each
-    char* at = piece.data();
-    for (int k = begin; k < end; ++k) {
-      if (k > 0) *at++ = ',';
-      at = std::to_chars(at, piece.data() + piece.size(), values[static_cast<std::size_t>(k)]).ptr;
+  // Many numbers (a many-body trajectory's row: 7 x 10^5 at 10^5 bodies on S^2, the shortest
+  // round-trip form ~0.1 us each) are formatted in chunks on threads, each into its own buffer,
+  // written in chunk order: the bytes of the loop above, whatever the thread count. Block by
+  // block, so that the buffers stay a few MB (a whole row's would be 0.2 GB at 10^6 bodies).
+  flush_buffer();  // (the row's cells so far go first)
+  const bool comma = !first_cell_;
+  first_cell_ = false;
+  constexpr int block = 1 << 17;
+  for (int first = 0; first < n; first += block) {
+    const int cells = std::min(block, n - first);
+    const int chunks = sesi::parallel::chunks_for(cells);
+    pieces_.resize(static_cast<std::size_t>(chunks));
+    sesi::parallel::for_chunks(cells, chunks, [&](int begin, int end, int c) {
+      std::vector<char>& piece = pieces_[static_cast<std::size_t>(c)];
+      piece.resize(static_cast<std::size_t>(end - begin) * 33);  // a comma and at most 32 characters each
+      char* at = piece.data();
+      for (int k = first + begin; k < first + end; ++k) {
+        if (k > 0 || comma) *at++ = ',';
+        at = std::to_chars(at, piece.data() + piece.size(), values[static_cast<std::size_t>(k)]).ptr;
+      }
+      piece.resize(static_cast<std::size_t>(at - piece.data()));
+    });
+    for (int c = 0; c < chunks; ++c) {
+      const std::vector<char>& piece = pieces_[static_cast<std::size_t>(c)];
+      check(std::fwrite(piece.data(), 1, piece.size(), file_) == piece.size());
     }
-    piece.resize(static_cast<std::size_t>(at - piece.data()));
-  });
-  for (const std::vector<char>& piece : pieces_) check(std::fwrite(piece.data(), 1, piece.size(), file_) == piece.size());
-  check(std::fputc('\n', file_) != EOF);
+  }
 }
 
 void CsvWriter::begin_row() {

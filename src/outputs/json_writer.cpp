@@ -5,7 +5,16 @@
 
 namespace sesi::program {
 
+bool JsonWriter::flush() {
+  if (sink_ && !out_.empty()) {
+    sink_ok_ = std::fwrite(out_.data(), 1, out_.size(), sink_) == out_.size() && sink_ok_;
+    out_.clear();  // (the capacity stays: one buffer for the whole document)
+  }
+  return sink_ok_;
+}
+
 void JsonWriter::open_item(std::string_view key) {
+  if (sink_ && out_.size() >= (std::size_t{1} << 20)) flush();
   if (depth_ > 0) {
     if (!first_) out_ += ',';
     out_ += '\n';

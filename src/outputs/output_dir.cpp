@@ -623,13 +623,21 @@ fs::path shown_path(const fs::path& path) {
 }
 
 void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
+  write_file_atomically(path, [&](std::FILE* file) { return std::fwrite(text.data(), 1, text.size(), file) == text.size(); });
+}
+
+void write_file_atomically(const std::filesystem::path& path, const std::function<bool(std::FILE*)>& write) {
   const std::filesystem::path temporary = path.string() + ".tmp";
   std::FILE* file = std::fopen(temporary.c_str(), "w");
   bool ok = file != nullptr;
-  if (ok) ok = std::fwrite(text.data(), 1, text.size(), file) == text.size();
+  if (ok) ok = write(file);
   if (file) ok = std::fclose(file) == 0 && ok;
   if (ok) ok = std::rename(temporary.c_str(), path.c_str()) == 0;
-  if (!ok) throw std::runtime_error("cannot write " + shown_path(path).string() + ": " + std::strerror(errno));
+  if (!ok) {
+    const int error = errno;
+    std::remove(temporary.c_str());  // (no half-written file left beside the outputs)
+    throw std::runtime_error("cannot write " + shown_path(path).string() + ": " + std::strerror(error));
+  }
 }
 
 }  // namespace sesi::program

@@ -22,7 +22,9 @@
 /// - holding the lock, a run removes the staging directories of killed runs into the same
 ///   directory (marked by sesi, holding only sesi outputs) and names any other such folder.
 
+#include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -113,5 +115,8 @@ std::filesystem::path shown_path(const std::filesystem::path& path);
 /// text into path through a temporary file beside it and a rename, so that the file is whole
 /// or absent; a write error throws std::runtime_error naming path as shown_path shows it.
 void write_file_atomically(const std::filesystem::path& path, const std::string& text);
+/// As above, the file's bytes written by `write` to the open file (a document too large to hold
+/// as one string: summary.json's final state at 10^6 bodies); `write` returns false on an error.
+void write_file_atomically(const std::filesystem::path& path, const std::function<bool(std::FILE*)>& write);
 
 }  // namespace sesi::program

@@ -5,7 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
+#include <string>
+#include <string_view>
 
 #include "exact_track.hpp"
 #include "output_dir.hpp"
@@ -21,23 +24,30 @@ int ambient_dim(const SpaceSpec& space) {
   return space.kind == SpaceKind::euclidean ? space.dim : space.dim + 1;
 }
 
-std::vector<std::string> trajectory_header(const Scene& scene) {
-  std::vector<std::string> names{"t"};
+/// trajectory.csv's column names, one at a time (CsvWriter::HeaderNames).
+void trajectory_header(const Scene& scene, const std::function<void(std::string_view)>& emit) {
+  emit("t");
   const int n = scene.dim(), a = ambient_dim(scene.space);
+  std::string name;
+  const auto column = [&](const std::string& body, const char* what, int i) {
+    name = body;
+    name += what;
+    name += std::to_string(i);
+    emit(name);
+  };
   for (int b = 1; b <= scene.body_count(); ++b) {
     const std::string body = "b" + std::to_string(b) + "_";
-    for (int i = 1; i <= n; ++i) names.push_back(body + "q" + std::to_string(i));
-    for (int i = 1; i <= n; ++i) names.push_back(body + "p" + std::to_string(i));
-    for (int i = 1; i <= a; ++i) names.push_back(body + "x" + std::to_string(i));
+    for (int i = 1; i <= n; ++i) column(body, "q", i);
+    for (int i = 1; i <= n; ++i) column(body, "p", i);
+    for (int i = 1; i <= a; ++i) column(body, "x", i);
     // On a topology: the image counts (E^n box), or the unwrapped point and the word (H^2 surface).
     if (!scene.space.box.empty()) {
-      for (int i = 1; i <= n; ++i) names.push_back(body + "n" + std::to_string(i));
+      for (int i = 1; i <= n; ++i) column(body, "n", i);
     } else if (scene.space.genus > 0) {
-      for (int i = 1; i <= a; ++i) names.push_back(body + "u" + std::to_string(i));
-      names.push_back(body + "word");
+      for (int i = 1; i <= a; ++i) column(body, "u", i);
+      emit(body + "word");
     }
   }
-  return names;
 }
 
 std::vector<std::string> diagnostics_header(const Scene& scene, const std::vector<std::string>& momentum_names) {
@@ -77,7 +87,8 @@ Recorder::Recorder(const Scene& scene, std::filesystem::path dir, std::vector<st
     throw std::logic_error("trajectory_format h5md in a build without HDF5");
 #endif
   } else {
-    trajectory_csv_.emplace(dir_ / "trajectory.csv", trajectory_header(scene));
+    trajectory_csv_.emplace(dir_ / "trajectory.csv",
+                            [&](const std::function<void(std::string_view)>& emit) { trajectory_header(scene, emit); });
   }
   stats_.momentum_names = std::move(momentum_names);
   if (scene.exact == ExactSolution::paper) {
@@ -196,13 +207,21 @@ void Recorder::write_row(const Snapshot& s) {
     }
   }
   if (trajectory_csv_ && !scene_.space.has_topology()) {
-    row_.assign(1, s.t);
-    for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
-      row_.insert(row_.end(), s.q.col(b).data(), s.q.col(b).data() + s.q.rows());
-      row_.insert(row_.end(), s.p.col(b).data(), s.p.col(b).data() + s.p.rows());
-      row_.insert(row_.end(), s.x.col(b).data(), s.x.col(b).data() + s.x.rows());
+    // In blocks of bodies (a row of 10^6 bodies would be 56 MB of doubles held at once).
+    CsvWriter& csv = *trajectory_csv_;
+    csv.begin_row();
+    csv.number(s.t);
+    constexpr Eigen::Index block = 1 << 14;
+    for (Eigen::Index first = 0; first < s.q.cols(); first += block) {
+      row_.clear();
+      for (Eigen::Index b = first; b < std::min(first + block, s.q.cols()); ++b) {
+        row_.insert(row_.end(), s.q.col(b).data(), s.q.col(b).data() + s.q.rows());
+        row_.insert(row_.end(), s.p.col(b).data(), s.p.col(b).data() + s.p.rows());
+        row_.insert(row_.end(), s.x.col(b).data(), s.x.col(b).data() + s.x.rows());
+      }
+      csv.numbers(row_);
     }
-    trajectory_csv_->row(row_);
+    csv.end_row();
   } else if (trajectory_csv_) {
     check_topology(s);
     CsvWriter& csv = *trajectory_csv_;
@@ -277,7 +296,7 @@ void Recorder::finish(const RunOutcome& outcome, double wall_seconds, int ranks)
   }
   const long planned = step_count(*scene_.integrator.t_end, *scene_.integrator.dt);
   const SummaryData data{scene_, outcome, planned, wall_seconds, stats_, final_, exact, ranks};
-  write_file_atomically(dir_ / "summary.json", summary_json(data));
+  write_summary(data, dir_ / "summary.json");
 }
 
 }  // namespace sesi::program

@@ -4,11 +4,13 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <variant>
 
 #include <sesi/parallel.hpp>
 
 #include "json_writer.hpp"
+#include "output_dir.hpp"
 #include "methods.hpp"
 #include "validate.hpp"
 
@@ -36,10 +38,14 @@ void write_final_state(JsonWriter& json, const Snapshot& s) {
   json.begin_array("bodies");
   for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
     json.begin_object();
-    json.numbers("q", Eigen::VectorXd(s.q.col(b)));
-    json.numbers("p", Eigen::VectorXd(s.p.col(b)));
-    json.numbers("x", Eigen::VectorXd(s.x.col(b)));
-    json.numbers("v", Eigen::VectorXd(s.v.col(b)));
+    // (A column of a column-major matrix: contiguous.)
+    const auto column = [b](const Eigen::MatrixXd& m) {
+      return std::span<const double>(m.col(b).data(), static_cast<std::size_t>(m.rows()));
+    };
+    json.numbers("q", column(s.q));
+    json.numbers("p", column(s.p));
+    json.numbers("x", column(s.x));
+    json.numbers("v", column(s.v));
     // On a topology: the image counts (E^n box), or the unwrapped point and the word (H^2 surface).
     if (s.image_counts.cols() > b) json.numbers("n", Eigen::VectorXd(s.image_counts.col(b).cast<double>()));
     if (s.unwrapped.cols() > b) json.numbers("u", Eigen::VectorXd(s.unwrapped.col(b)));
@@ -157,12 +163,11 @@ void write_thermostat(JsonWriter& json, const ThermostatSpec& t, const Invariant
                                        : "judges the conserved quantity, E + the thermostat's offset");
   json.end_object();
 }
-}  // namespace
 
-std::string summary_json(const SummaryData& d) {
+/// summary.json into json.
+void write_summary_into(JsonWriter& json, const SummaryData& d) {
   const Scene& scene = d.scene;
   const InvariantStats& inv = d.invariants;
-  JsonWriter json;
   json.begin_object();
   json.string("scene", scene.name);
   json.string("source", scene.source);
@@ -246,7 +251,16 @@ std::string summary_json(const SummaryData& d) {
     json.end_object();
   }
   json.end_object();
-  return json.text();
+}
+
+}  // namespace
+
+void write_summary(const SummaryData& d, const std::filesystem::path& path) {
+  write_file_atomically(path, [&](std::FILE* file) {
+    JsonWriter json(file);
+    write_summary_into(json, d);
+    return json.flush();
+  });
 }
 
 }  // namespace sesi::program

@@ -2,6 +2,7 @@
 /// @file summary.hpp
 /// The content of summary.json (docs/scene-format.md, Outputs, lists the fields).
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -54,7 +55,8 @@ struct SummaryData {
   int ranks = 1;  ///< the MPI ranks that ran the steps (`mpirun -np K sesi run`), 1 for one process
 };
 
-/// summary.json as text.
-std::string summary_json(const SummaryData& data);
+/// summary.json written into path (whole or absent: write_file_atomically), streamed: its final
+/// state is never held as one string. Throws std::runtime_error on a write error.
+void write_summary(const SummaryData& data, const std::filesystem::path& path);
 
 }  // namespace sesi::program

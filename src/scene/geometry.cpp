@@ -108,6 +108,10 @@ double Geometry::kinetic_energy(const Vector& q, const Vector& p, double m) cons
   return std::visit([&](const auto& chart) { return sesi::kinetic_energy(chart, q, p, m); }, chart_);
 }
 
+double Geometry::chord_of_distance(double d) const {
+  return std::visit([d](const auto& chart) { return chart.chord_of_distance(d); }, chart_);
+}
+
 double Geometry::distance(const Vector& x0, const Vector& y0) const {
   // The minimum image (Allen & Tildesley 1.5.2; Sausset & Tarjus 2007 on the surfaces): both
   // reduced into the domain, y moved to its image nearest to x.

@@ -51,6 +51,9 @@ class Geometry {
   Vector velocity(const Vector& q, const Vector& p, double m) const;
   double kinetic_energy(const Vector& q, const Vector& p, double m) const;
   double distance(const Vector& x, const Vector& y) const;
+  /// The chord of a geodesic distance d in the ambient metric (Minkowski on H^n), monotone in d:
+  /// the chart's chord_of_distance.
+  double chord_of_distance(double d) const;
   /// H^n: the distance of x from the origin in radii, asinh(|x_1..x_n| / R) (no cancellation);
   /// 0 on S^n and E^n.
   double radii_from_origin(const Vector& x) const;

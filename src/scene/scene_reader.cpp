@@ -4,11 +4,14 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <charconv>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <optional>
 
@@ -321,6 +324,44 @@ class TableReader {
   const std::string& file_;
 };
 
+/// One body's values as given, read on demand, and where each is: a [[bodies]] table or a row of
+/// a bodies file (CSV). SceneReader::read_body makes every check of a body through it, so both
+/// forms are checked alike, with messages that name the table's key or the file's line.
+class BodyInput {
+ public:
+  virtual ~BodyInput() = default;
+  virtual bool has(std::string_view key) const = 0;  ///< "mass", "q", "p", "x" or "v"
+  virtual double number(std::string_view key, std::string_view expected) const = 0;
+  virtual Eigen::VectorXd vector(std::string_view key, int size, std::string_view what) const = 0;
+  virtual Origin origin() const = 0;                    ///< where the body starts
+  virtual Origin origin_of(std::string_view key) const = 0;
+  virtual std::string key_path(std::string_view key) const = 0;
+  [[noreturn]] virtual void missing(std::string_view key, std::string_view expected) const = 0;
+  [[noreturn]] void fail(std::string_view key, std::string_view message) const {
+    throw InputError(origin_of(key), key_path(key), message);
+  }
+};
+
+/// A [[bodies]] table.
+class TableBody final : public BodyInput {
+ public:
+  explicit TableBody(const TableReader& table) : table_(table) {}
+  bool has(std::string_view key) const override { return table_.has(key); }
+  double number(std::string_view key, std::string_view expected) const override { return table_.number(key, expected); }
+  Eigen::VectorXd vector(std::string_view key, int size, std::string_view what) const override {
+    return table_.vector(key, size, what);
+  }
+  Origin origin() const override { return table_.origin(); }
+  Origin origin_of(std::string_view key) const override { return table_.origin_of(key); }
+  std::string key_path(std::string_view key) const override { return table_.key_path(key); }
+  [[noreturn]] void missing(std::string_view key, std::string_view expected) const override {
+    table_.missing(key, expected);
+  }
+
+ private:
+  const TableReader& table_;
+};
+
 /// A [thermostat] table (docs/scene-format.md): kind, temperature (a number or a schedule
 /// [[t0, T0], [t1, T1], ...]) and the kind's own keys, each checked where it stands.
 ThermostatSpec read_thermostat(const TableReader& th) {
@@ -403,11 +444,96 @@ ThermostatSpec read_thermostat(const TableReader& th) {
   return spec;
 }
 
+// ---- bodies from a file (docs/scene-format.md, "Bodies from a file") ---------------------------
+
+/// The comma-separated fields of a line, spaces and tabs around each trimmed (and a CR, for
+/// files with CRLF line ends); views into line.
+void split_fields(std::string_view line, std::vector<std::string_view>& fields) {
+  const auto trim = [](std::string_view f) {
+    const std::size_t first = f.find_first_not_of(" \t\r");
+    if (first == std::string_view::npos) return f.substr(0, 0);
+    return f.substr(first, f.find_last_not_of(" \t\r") - first + 1);
+  };
+  fields.clear();
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    const std::size_t length = comma == std::string_view::npos ? std::string_view::npos : comma - start;
+    fields.push_back(trim(line.substr(start, length)));
+    if (comma == std::string_view::npos) return;
+    start = comma + 1;
+  }
+}
+
+/// A bodies file's columns, from its header: the field of the mass and of each component of q,
+/// p, x, v (empty when absent).
+struct BodyColumns {
+  int count = 0;
+  int mass = -1;
+  std::array<std::vector<int>, 4> fields;  ///< q, p, x, v
+  std::vector<std::string> names;          ///< the header's names, by field
+
+  static constexpr std::array<std::string_view, 4> vectors = {"q"sv, "p"sv, "x"sv, "v"sv};
+  const std::vector<int>& of(std::string_view key) const {
+    return fields[static_cast<std::size_t>(std::find(vectors.begin(), vectors.end(), key) - vectors.begin())];
+  }
+};
+
+/// One row of a bodies file, as read_body reads a [[bodies]] table: the row's numbers (parsed
+/// and checked finite), the file and line for messages, "bodies[k]" for keys.
+class RowBody final : public BodyInput {
+ public:
+  RowBody(const BodyColumns& columns, const std::vector<double>& values, const std::string& file, int line,
+          int index)
+      : columns_(columns), values_(values), file_(file), line_(line), index_(index) {}
+  bool has(std::string_view key) const override { return key == "mass" || !columns_.of(key).empty(); }
+  double number(std::string_view, std::string_view) const override {
+    return values_[static_cast<std::size_t>(columns_.mass)];  // (only the mass is a number)
+  }
+  Eigen::VectorXd vector(std::string_view key, int size, std::string_view) const override {
+    const std::vector<int>& fields = columns_.of(key);  // (the header has all size of them)
+    Eigen::VectorXd out(size);
+    for (int k = 0; k < size; ++k) out[k] = values_[static_cast<std::size_t>(fields[static_cast<std::size_t>(k)])];
+    return out;
+  }
+  Origin origin() const override { return {file_, line_}; }
+  Origin origin_of(std::string_view) const override { return origin(); }
+  std::string key_path(std::string_view key) const override {
+    return "bodies[" + std::to_string(index_) + "]." + std::string(key);
+  }
+  [[noreturn]] void missing(std::string_view key, std::string_view expected) const override {
+    throw InputError(origin(), key_path(key), "missing column (" + std::string(expected) + ")");
+  }
+
+ private:
+  const BodyColumns& columns_;
+  const std::vector<double>& values_;
+  const std::string& file_;
+  int line_;
+  int index_;
+};
+
 /// Where each body and potential came from, for the checks that involve several of them.
+/// Compact, for 10^6 bodies and more: the file once (the scene file, or the bodies file), then
+/// each body's line and column (column 0 in a bodies file) and whether its position was q or x.
 struct Provenance {
-  std::vector<Origin> bodies;             // the [[bodies]] tables
-  std::vector<std::string> body_position; // "bodies[2].q" or "bodies[2].x"
+  std::string body_file;
+  std::vector<std::pair<int, int>> body_where;
+  std::vector<bool> body_chart;
   std::vector<Origin> potentials;
+
+  void add_body(const Origin& where, bool chart) {
+    body_where.emplace_back(where.line, where.column);
+    body_chart.push_back(chart);
+  }
+  Origin body_origin(int b) const {
+    const auto& [line, column] = body_where[static_cast<std::size_t>(b)];
+    return {body_file, line, column};
+  }
+  /// "bodies[2].q" or "bodies[2].x"
+  std::string body_position(int b) const {
+    return "bodies[" + std::to_string(b + 1) + "]." + (body_chart[static_cast<std::size_t>(b)] ? "q" : "x");
+  }
 };
 
 class SceneReader {
@@ -509,16 +635,215 @@ class SceneReader {
   }
 
   void read_bodies() {
+    const toml::node* node = root_.get("bodies");
+    if (node && node->is_string()) {
+      read_body_file(root_.string("bodies", "the path of a bodies file (CSV)"));
+      return;
+    }
+    if (node && !(node->is_array() && node->as_array()->is_array_of_tables())) {
+      root_.fail("bodies", "expected an array of tables [[bodies]] or the path of a bodies file (CSV), got " +
+                               std::string(type_name(*node)));
+    }
     const auto tables = root_.tables("bodies");
     if (tables.empty()) root_.missing("bodies", "at least one [[bodies]] table");
+    provenance_.body_file = file_;
     for (std::size_t b = 0; b < tables.size(); ++b) {
-      read_body(TableReader(*tables[b], "bodies[" + std::to_string(b + 1) + "]", file_));
+      static constexpr std::array keys = {"mass"sv, "q"sv, "p"sv, "x"sv, "v"sv};
+      const TableReader table(*tables[b], "bodies[" + std::to_string(b + 1) + "]", file_);
+      table.allow_only(keys, "[[bodies]]");
+      read_body(TableBody(table));
     }
   }
 
-  void read_body(const TableReader& body) {
-    static constexpr std::array keys = {"mass"sv, "q"sv, "p"sv, "x"sv, "v"sv};
-    body.allow_only(keys, "[[bodies]]");
+  /// bodies = "FILE.csv": the bodies, one a row, read line by line (docs/scene-format.md, "Bodies
+  /// from a file"); the path is relative to the scene file's directory (to the current directory
+  /// for a scene without a file).
+  void read_body_file(const std::string& given) {
+    if (given.empty()) root_.fail("bodies", "expected the path of a bodies file (CSV), got an empty string");
+    const std::string file = (std::filesystem::path(file_).parent_path() / given).string();
+    std::error_code ec;
+    if (std::filesystem::is_directory(file, ec)) {
+      root_.fail("bodies", "expected a bodies file (CSV), got the directory '" + cut_input(file) + "'");
+    }
+    std::ifstream in(file, std::ios::binary);
+    if (!in) {
+      root_.fail("bodies", "cannot read the bodies file '" + cut_input(file) + "': " + std::strerror(errno));
+    }
+    provenance_.body_file = file;
+    std::optional<BodyColumns> columns;
+    // One line at a time, in a buffer of max_body_line bytes (a device or a file without line
+    // ends is refused, not read whole).
+    std::vector<char> buffer(max_body_line + 1);
+    std::vector<std::string_view> fields;
+    std::vector<double> values;
+    int number = 0;
+    for (bool more = true; more;) {
+      in.getline(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+      const std::streamsize got = in.gcount();
+      if (in.bad()) {
+        throw InputError(Origin{file, number + 1}, "bodies",
+                         "cannot read the bodies file: " + std::string(std::strerror(errno)));
+      }
+      if (in.fail() && !in.eof()) {
+        throw InputError(Origin{file, number + 1}, "bodies",
+                         "a line longer than " + std::to_string(max_body_line) + " bytes; at most that many are allowed");
+      }
+      more = !in.eof();
+      if (got == 0 && !more) break;
+      std::string_view line(buffer.data(), static_cast<std::size_t>(got - (more ? 1 : 0)));
+      if (number == std::numeric_limits<int>::max()) {
+        throw InputError(Origin{file}, "bodies", "more than 2^31 - 1 lines; at most that many are allowed");
+      }
+      if (++number == 1 && line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);  // a byte-order mark
+      split_fields(line, fields);
+      if ((fields.size() == 1 && fields[0].empty()) || fields[0].starts_with('#')) continue;  // blank, comment
+      const auto column_of = [&](std::size_t f) { return static_cast<int>(fields[f].data() - line.data()) + 1; };
+      if (!columns) {
+        columns = read_body_columns(fields, file, number, column_of);
+        continue;
+      }
+      const int index = scene_.body_count() + 1;
+      if (static_cast<int>(fields.size()) != columns->count) {
+        throw InputError(Origin{file, number}, "bodies[" + std::to_string(index) + "]",
+                         "expected " + std::to_string(columns->count) + " fields (the header's columns), got " +
+                             std::to_string(fields.size()));
+      }
+      values.resize(fields.size());
+      for (std::size_t f = 0; f < fields.size(); ++f) {
+        // Exact: the nearest double to the decimal text (a %.17g or repr() value reads back as written).
+        const char* end = fields[f].data() + fields[f].size();
+        const auto [ptr, error] = std::from_chars(fields[f].data(), end, values[f]);
+        if (error != std::errc{} || ptr != end || !std::isfinite(values[f])) {
+          throw InputError(Origin{file, number, column_of(f)},
+                           "bodies[" + std::to_string(index) + "]." + columns->names[f],
+                           "expected a finite number, got '" + cut_input(fields[f]) + "'");
+        }
+      }
+      read_body(RowBody(*columns, values, file, number, index));
+    }
+    if (!columns) {
+      throw InputError(Origin{file}, "bodies",
+                       "no header line (expected the column names, e.g. mass," + axis_names("x") + ")");
+    }
+    if (scene_.bodies.empty()) {
+      throw InputError(Origin{file}, "bodies", "no rows after the header (expected at least one body)");
+    }
+  }
+
+  /// "x1,x2,x3" for the space's ambient dimension (or q's dimension).
+  std::string axis_names(std::string_view key) const {
+    const int size = key == "q" || key == "p" ? scene_.dim() : geometry_->ambient_dim();
+    std::string out;
+    for (int k = 1; k <= size; ++k) out += (k > 1 ? "," : "") + std::string(key) + std::to_string(k);
+    return out;
+  }
+  /// "q1..q3" (or "q1" in one dimension)
+  std::string axis_range(std::string_view key) const {
+    const int size = key == "q" || key == "p" ? scene_.dim() : geometry_->ambient_dim();
+    const std::string k(key);
+    return size == 1 ? k + "1" : k + "1.." + k + std::to_string(size);
+  }
+
+  /// The header of a bodies file: mass, then q1..qn (p1..pn optional) or x1..xa (v1..va
+  /// optional), a the ambient dimension, in any order.
+  template <class ColumnOf>
+  BodyColumns read_body_columns(const std::vector<std::string_view>& fields, const std::string& file, int line,
+                                const ColumnOf& column_of) const {
+    const int n = scene_.dim(), a = geometry_->ambient_dim();
+    BodyColumns out;
+    out.count = static_cast<int>(fields.size());
+    for (std::size_t k = 0; k < 4; ++k) out.fields[k].assign(static_cast<std::size_t>(k < 2 ? n : a), -1);
+    std::vector<int> where;  // each name's column, for "given twice"
+    for (std::size_t f = 0; f < fields.size(); ++f) {
+      const std::string_view name = fields[f];
+      const Origin at{file, line, column_of(f)};
+      int* slot = nullptr;
+      if (name == "mass") {
+        slot = &out.mass;
+      } else if (!name.empty()) {
+        const auto v = std::find(BodyColumns::vectors.begin(), BodyColumns::vectors.end(), name.substr(0, 1));
+        int axis = 0;
+        const char* end = name.data() + name.size();
+        if (v != BodyColumns::vectors.end() && name.size() > 1 && name[1] != '0') {
+          const auto [ptr, error] = std::from_chars(name.data() + 1, end, axis);
+          const std::size_t kind = static_cast<std::size_t>(v - BodyColumns::vectors.begin());
+          if (error == std::errc{} && ptr == end && axis >= 1 && axis <= (kind < 2 ? n : a)) {
+            slot = &out.fields[kind][static_cast<std::size_t>(axis - 1)];
+          }
+        }
+      }
+      if (!slot) {
+        if (name.empty()) throw InputError(at, "", "a column without a name in the bodies file's header");
+        std::vector<std::string> names = {"mass"};
+        for (std::string_view key : BodyColumns::vectors) {
+          const int size = key == "q" || key == "p" ? n : a;
+          for (int k = 1; k <= size; ++k) names.push_back(std::string(key) + std::to_string(k));
+        }
+        const std::vector<std::string_view> candidates(names.begin(), names.end());
+        const std::string hint = did_you_mean(name, candidates);
+        throw InputError(at, cut_input(name),
+                         "unknown column in the bodies file" +
+                             (hint.empty() ? " (expected mass, " + axis_range("q") + ", " + axis_range("p") + ", " +
+                                                 axis_range("x") + " or " + axis_range("v") + ")"
+                                           : hint));
+      }
+      if (*slot >= 0) {
+        throw InputError(at, cut_input(name),
+                         "column given twice (also column " + std::to_string(where[static_cast<std::size_t>(*slot)]) +
+                             " of the header)");
+      }
+      *slot = static_cast<int>(f);
+      where.push_back(at.column);
+      out.names.emplace_back(name);
+    }
+    const Origin header{file, line};
+    if (out.mass < 0) throw InputError(header, "mass", "missing required column (the bodies' masses)");
+    const auto given = [&](std::size_t k) {
+      return std::count_if(out.fields[k].begin(), out.fields[k].end(), [](int f) { return f >= 0; });
+    };
+    const auto first = [&](std::size_t k) {  // the first column of q, p, x or v given, for messages
+      const int f = *std::min_element(out.fields[k].begin(), out.fields[k].end(), [](int i, int j) {
+        return (i < 0 ? INT_MAX : i) < (j < 0 ? INT_MAX : j);
+      });
+      return std::pair{Origin{file, line, where[static_cast<std::size_t>(f)]}, out.names[static_cast<std::size_t>(f)]};
+    };
+    const bool chart = given(0) > 0, embedded = given(2) > 0;
+    if (chart && embedded) {
+      const auto [at, name] = first(2);
+      throw InputError(at, name, "give either " + axis_range("q") + " (with " + axis_range("p") + ") or " +
+                                     axis_range("x") + " (with " + axis_range("v") + "), not both");
+    }
+    if (!chart && !embedded) {
+      throw InputError(header, "q1", "missing required columns: the position, " + axis_range("q") +
+                                         " (chart coordinates) or " + axis_range("x") + " (embedding point)");
+    }
+    if (chart && given(3) > 0) {
+      const auto [at, name] = first(3);
+      throw InputError(at, name, axis_range("v") + " (an embedding velocity) go with " + axis_range("x") +
+                                     "; with " + axis_range("q") + " give the momenta " + axis_range("p"));
+    }
+    if (embedded && given(1) > 0) {
+      const auto [at, name] = first(1);
+      throw InputError(at, name, axis_range("p") + " (chart momenta) go with " + axis_range("q") + "; with " +
+                                     axis_range("x") + " give the velocity " + axis_range("v"));
+    }
+    // Each vector whole or (p, v) absent.
+    for (std::size_t k = 0; k < 4; ++k) {
+      if (given(k) == 0) {
+        out.fields[k].clear();
+        continue;
+      }
+      const auto missing = std::find(out.fields[k].begin(), out.fields[k].end(), -1);
+      if (missing != out.fields[k].end()) {
+        const std::string key(BodyColumns::vectors[k]);
+        throw InputError(header, key + std::to_string(missing - out.fields[k].begin() + 1),
+                         "missing column (" + axis_range(key) + (k % 2 == 0 ? " are required" : ": all or none") + ")");
+      }
+    }
+    return out;
+  }
+
+  void read_body(const BodyInput& body) {
     const Geometry& g = *geometry_;
     Body out;
     out.mass = body.number("mass", "a finite number > 0");
@@ -561,8 +886,8 @@ class SceneReader {
       }
       g.to_chart(x, v, out.mass, out.q, out.p);
     }
-    const std::string position_key = body.key_path(chart ? "q" : "x");
     if (!std::isfinite(g.kinetic_energy(out.q, out.p, out.mass))) {
+      const std::string position_key = body.key_path(chart ? "q" : "x");
       // A singular point is one where the inverse metric itself is not finite (unit momenta give
       // an infinite kinetic energy); anywhere else, the momenta are too large for double.
       if (!std::isfinite(g.kinetic_energy(out.q, Eigen::VectorXd::Ones(n), 1.0))) {
@@ -580,8 +905,7 @@ class SceneReader {
                            "; use smaller values or other units");
     }
     scene_.bodies.push_back(std::move(out));
-    provenance_.bodies.push_back(body.origin());
-    provenance_.body_position.push_back(position_key);
+    provenance_.add_body(body.origin(), chart);
   }
 
   /// "sphere", "hyperboloid", "Euclidean space" (what points lie on).
@@ -777,17 +1101,17 @@ class SceneReader {
     const double scale = g.length_scale();
     const bool sphere = scene_.space.kind == SpaceKind::sphere;
     const double antipodal = std::numbers::pi * scene_.space.radius;
-    std::vector<Eigen::VectorXd> x;
-    for (const Body& b : scene_.bodies) x.push_back(g.embed(b.q));
+    // The embedding points once, as columns (no vector per body besides: 10^6 bodies and more).
     Eigen::MatrixXd points(g.ambient_dim(), count);
-    for (int i = 0; i < count; ++i) points.col(i) = x[static_cast<std::size_t>(i)];
+    for (int i = 0; i < count; ++i) points.col(i) = g.embed(scene_.bodies[static_cast<std::size_t>(i)].q);
+    const auto x = [&points](int i) -> Eigen::VectorXd { return points.col(i); };
     for (std::size_t k = 0; k < scene_.potentials.size(); ++k) {
       const PotentialSpec& spec = scene_.potentials[k];
       const std::string term = std::string(potential_kind(spec)) + " potential (potential[" +
                                std::to_string(k + 1) + "])";
       if (const auto* center = std::get_if<CentralCotangentSpec>(&spec)) {
         for (int i = 0; i < count; ++i) {
-          const double d = g.distance(x[i], center->center);
+          const double d = g.distance(x(i), center->center);
           if (d <= same_point_tolerance * scale) body_error(i, "at the center of the " + term + ", where it is singular");
           if (sphere && d >= antipodal * (1 - same_point_tolerance)) {
             body_error(i, "antipodal to the center of the " + term + ", where it is singular");
@@ -799,7 +1123,7 @@ class SceneReader {
       const bool singular_at_contact = !std::holds_alternative<HarmonicPairSpec>(spec);
       const bool cotangent_on_sphere = std::holds_alternative<CotangentGravitySpec>(spec) && sphere;
       const auto check_pair = [&](int i, int j) {
-        const double d = g.distance(x[static_cast<std::size_t>(i)], x[static_cast<std::size_t>(j)]);
+        const double d = g.distance(x(i), x(j));
         if (singular_at_contact && d <= same_point_tolerance * scale) {
           body_error(j, "at the same point as bodies[" + std::to_string(i + 1) + "], where the " + term +
                             " is singular");
@@ -851,8 +1175,7 @@ class SceneReader {
     const Geometry& g = *geometry_;
     for (int b = 0; b < scene_.body_count(); ++b) {
       check_far_resolution(g.radii_from_origin(g.embed(scene_.bodies[static_cast<std::size_t>(b)].q)), scene_.dim(),
-                           provenance_.bodies[static_cast<std::size_t>(b)],
-                           provenance_.body_position[static_cast<std::size_t>(b)]);
+                           provenance_.body_origin(b), provenance_.body_position(b));
     }
     for (std::size_t k = 0; k < scene_.potentials.size(); ++k) {
       if (const auto* central = std::get_if<CentralCotangentSpec>(&scene_.potentials[k])) {
@@ -876,8 +1199,7 @@ class SceneReader {
   }
 
   [[noreturn]] void body_error(int b, const std::string& message) const {
-    throw InputError(provenance_.bodies[static_cast<std::size_t>(b)],
-                     provenance_.body_position[static_cast<std::size_t>(b)], message);
+    throw InputError(provenance_.body_origin(b), provenance_.body_position(b), message);
   }
 
   void read_exact() {
@@ -894,6 +1216,9 @@ class SceneReader {
   }
 
   static constexpr int max_dim = 1000;
+  /// The longest line of a bodies file: a row of dim max_dim holds at most 4 (max_dim + 1) + 1
+  /// numbers, about 100 KB at 25 bytes each.
+  static constexpr std::size_t max_body_line = std::size_t{1} << 20;
 
   TableReader root_;
   const std::string& file_;

@@ -457,7 +457,12 @@ Sweep read_sweep_file(const fs::path& path) {
   }
 
   const std::string scene_text = read_text(sweep.scene_path, scene_origin, "scene", "scene file");
-  const toml::table base = parse_toml(scene_text, sweep.scene_path.string());
+  toml::table base = parse_toml(scene_text, sweep.scene_path.string());
+  // A bodies file (bodies = "FILE.csv") is relative to the base scene's directory, but each run's
+  // scene is read from its own directory: the runs name the file by its absolute path.
+  if (auto* bodies = base.get_as<std::string>("bodies"); bodies && fs::path(bodies->get()).is_relative()) {
+    *bodies = fs::absolute(sweep.scene_path.parent_path() / bodies->get()).lexically_normal().string();
+  }
 
   // Build every variant: the first [[vary]] varies slowest.
   sweep.variants.reserve(static_cast<std::size_t>(total));

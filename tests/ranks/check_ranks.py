@@ -121,6 +121,25 @@ def flat_scene(ctx, side, steps, seed=5):
     return ctx.write("e3.toml", "\n".join(lines) + "\n")
 
 
+def box_scene(ctx, side, steps, drift=2.0, seed=9):
+    """E^2 Lennard-Jones in a periodic box: side^2 bodies on a square lattice at density 1/2
+    (spacing sqrt 2, the box side x sqrt 2 wide), jittered by up to 0.1, the first column 0.05 from
+    the box's face; unit-temperature velocities (seeded) plus a drift along x, so that bodies
+    cross the face (the run wraps them: image counts) and every slab's cuts along x."""
+    rng = random.Random(seed)
+    spacing = math.sqrt(2.0)
+    edge = side * spacing
+    lines = [f'name = "lj-box-{side * side}"', "[space]", 'kind = "euclidean"', "dim = 2", f"box = [{edge!r}, {edge!r}]",
+             "[[potential]]", 'kind = "lennard-jones"', "epsilon = 1.0", "sigma = 1.0", "cutoff = 2.5",
+             "[integrator]", 'method = "sesi2"', "dt = 0.002", f"t_end = {steps * 0.002!r}", "neighbour_skin = 0.12"]
+    for i in range(side):
+        for j in range(side):
+            x = [0.05 + spacing * i + rng.uniform(0.0, 0.1), spacing * (j + 0.5) + rng.uniform(-0.1, 0.1)]
+            p = [rng.gauss(0.0, 1.0) + drift, rng.gauss(0.0, 1.0)]
+            lines += ["[[bodies]]", "mass = 1.0", f"q = [{', '.join(map(repr, x))}]", f"p = [{', '.join(map(repr, p))}]"]
+    return ctx.write("box.toml", "\n".join(lines) + "\n")
+
+
 def hyperbolic_far_scene(ctx, side, steps, boost=10.0, seed=7):
     """H^2 (R = 20): side^2 bodies on a square grid of spacing 1.4 sigma about the origin, mapped by
     the exponential map, with unit-temperature tangent velocities (seeded), then boosted `boost`
@@ -263,6 +282,22 @@ def same_on_every_count(ctx, scene, space, counts, extra=(), threads=1):
         shutil.rmtree(out)
 
 
+def stopped_on_two_resumed_on_three(ctx, scene, what):
+    """scene (300 steps of 0.002) run on 2 ranks to t = 0.3, then resumed on 3 to its end: the
+    uninterrupted plain run's files, checkpoint at the end included."""
+    settings = ["--output-every", "25", "--checkpoint-every", "40", "--threads", "1", "--quiet"]
+    whole = ctx.work / f"whole-{what}"
+    expect_ok(ctx.run("run", scene, "--out", whole, *settings), f"uninterrupted plain run ({what})")
+    first = ctx.work / f"first-{what}"
+    expect_ok(ctx.run("run", scene, "--out", first, "--t-end", "0.3", *settings, ranks=2),
+              f"mpiexec -np 2 sesi run --t-end 0.3 ({what})")
+    expect_ok(ctx.run("resume", first, "--t-end", "0.6", "--threads", "1", "--quiet", ranks=3),
+              f"sesi resume on 3 ranks ({what})")
+    expect_same_outputs(first, whole, f"{what} resumed on 3 ranks")
+    check((first / "checkpoint").read_bytes() == (whole / "checkpoint").read_bytes(),
+          f"the checkpoint at the end of the {what} run resumed on 3 ranks differs from the plain run's")
+
+
 # ---- the cases -----------------------------------------------------------------------------------
 
 @case
@@ -314,6 +349,50 @@ def ranks_resume_other_count(ctx):
     # The checkpoints at the end are the same too: the state is the same to the bit.
     check((ctx.work / "resumed-3" / "checkpoint").read_bytes() == (whole / "checkpoint").read_bytes(),
           "the checkpoint at the end of the resumed run on 3 ranks differs from the plain run's")
+
+
+@case
+def ranks_periodic_box(ctx):
+    """E^2 in a periodic box, 40^2 bodies drifting along x, 300 steps of sesi2: byte-identical
+    outputs on 1, 2 and 3 ranks (the slabs are periodic along x; a body's image counts travel with
+    it; the wrap is the whole run's call). Then a run on 2 ranks stopped half way and resumed on 3
+    equals the uninterrupted plain run, checkpoint included."""
+    scene = box_scene(ctx, 40, 300)
+    settings = ["--output-every", "25", "--threads", "1", "--quiet"]
+    plain = ctx.work / "plain-box"
+    expect_ok(ctx.run("run", scene, "--out", plain, *settings), "plain sesi run (box)")
+    # What the case must exercise: bodies wrapped across the face (non-zero image counts at the end).
+    with open(plain / "trajectory.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    header, last = rows[0], rows[-1]
+    wrapped = sum(1 for name, value in zip(header, last) if name.endswith("_n1") and int(float(value)) != 0)
+    check(wrapped > 0, "no body crossed the box's face along x (all image counts 0)")
+    for ranks in (1, 2, 3):
+        out = ctx.work / f"box-np{ranks}"
+        what = f"mpiexec -np {ranks} sesi run (box)"
+        expect_ok(ctx.run("run", scene, "--out", out, *settings, ranks=ranks), what)
+        expect_same_outputs(out, plain, what)
+        shutil.rmtree(out)
+    stopped_on_two_resumed_on_three(ctx, scene, "box")
+
+
+@case
+def ranks_thermostats(ctx):
+    """S^2, 2000 bodies, 300 steps under each thermostat (Langevin with a temperature schedule,
+    Nose-Hoover, CSVR): byte-identical outputs on 2 and 3 ranks. The noise is keyed by a body's
+    index in the whole run and the kinetic energy, N_f and the heat are summed over all ranks in
+    body order (include/sesi/thermostat.hpp). Then a Langevin run on 2 ranks stopped half way and
+    resumed on 3 equals the uninterrupted plain run, checkpoint included."""
+    space = ("sphere", math.sqrt(2000 / 0.5 / (4.0 * math.pi)), 0.0)
+    tables = {
+        "langevin": 'kind = "langevin"\ntemperature = [[0.0, 1.0], [0.6, 1.5]]\ngamma = 2.0\nseed = 11\n',
+        "nose-hoover": 'kind = "nose-hoover"\ntemperature = 1.2\ntau = 0.2\nchain = 3\n',
+        "csvr": 'kind = "csvr"\ntemperature = 0.8\ntau = 0.1\nseed = 5\n',
+    }
+    for kind, table in tables.items():
+        scene = sphere_scene(ctx, 2000, 300, f"{kind}.toml", "[thermostat]\n" + table)
+        same_on_every_count(ctx, scene, space, (2, 3), ["--output-every", "25"])
+    stopped_on_two_resumed_on_three(ctx, ctx.work / "langevin.toml", "Langevin")
 
 
 def rank_process(out, rank):
@@ -385,14 +464,17 @@ def ranks_refusals(ctx):
     """What a run across ranks does not support yet (src/domain/domain_integrator.hpp) is refused on
     2 ranks: exit status 2, one line from sesi naming it (mpiexec adds its own lines about the exit
     status), nothing written. The same scenes run in one process."""
-    thermostat = sphere_scene(ctx, 300, 10, "thermostat.toml",
-                              '[thermostat]\nkind = "langevin"\ntemperature = 1.0\ngamma = 1.0\nseed = 3\n')
+    surface = ctx.write("surface.toml", "\n".join([
+        'name = "surface"', "[space]", 'kind = "hyperbolic"', "dim = 2", "radius = 5.0", "genus = 2",
+        "[[potential]]", 'kind = "lennard-jones"', "epsilon = 1.0", "sigma = 1.0", "cutoff = 2.5",
+        "[integrator]", 'method = "sesi2"', "dt = 0.005", "t_end = 0.05",
+        "[[bodies]]", "mass = 1.0", "q = [0.1, 0.0]", "[[bodies]]", "mass = 1.0", "q = [0.35, 1.0]"]) + "\n")
     gravity = sphere_scene(ctx, 300, 10, "gravity.toml").read_text()
     gravity = ctx.write("gravity.toml", gravity.replace('kind = "lennard-jones"\nepsilon = 1.0\nsigma = 1.0\ncutoff = 2.5',
                                                         'kind = "cotangent-gravity"\nG = 0.001'))
     few = sphere_scene(ctx, 100, 10, "few.toml")
     geodesic = sphere_scene(ctx, 300, 10, "geodesic.toml")
-    cases = [(thermostat, [], ["thermostat"]), (gravity, [], ["cutoff", "cotangent-gravity"]), (few, [], ["256"]),
+    cases = [(surface, [], ["compact hyperbolic surface"]), (gravity, [], ["cutoff", "cotangent-gravity"]), (few, [], ["256"]),
              (geodesic, ["--method", "geodesic2"], ["geodesic2"])]
     # All four at once: mpiexec takes about a second to end a job whose ranks exit non-zero, mostly
     # waiting, so that together they take the time of one.
