@@ -64,6 +64,57 @@ inline CheckHandler set_check_handler(CheckHandler handler) {
 #define SESI_INLINE inline
 #endif
 
+/// SESI_TARGET_AVX2, SESI_TARGET_AVX512: copies of the many-body kernel's pair loop for wider
+/// vectors (System::pair_block), chosen at run time by simd::level(). They compute the same bits
+/// as the base copy: a lane does a scalar's IEEE operations, and neither target has FMA, so no
+/// multiply-add can be contracted whatever -ffp-contract says. Off x86-64, or with
+/// SESI_NO_SIMD_DISPATCH defined, there is the base copy alone.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(SESI_NO_SIMD_DISPATCH)
+#define SESI_SIMD_DISPATCH 1
+#define SESI_TARGET_AVX2 __attribute__((target("avx2")))
+#define SESI_TARGET_AVX512 __attribute__((target("avx512f")))
+#else
+#define SESI_SIMD_DISPATCH 0
+#endif
+/// SESI_PRAGMA_SIMD: the loop after it is vectorised whatever the cost model says (OpenMP's
+/// simd; nothing in a build without OpenMP, where the compiler decides alone).
+#if defined(_OPENMP)
+#define SESI_PRAGMA_SIMD _Pragma("omp simd")
+#else
+#define SESI_PRAGMA_SIMD
+#endif
+
+namespace sesi::simd {
+/// The vector width of the kernel's pair loop: base (the compiler's own target, SSE2 on a plain
+/// x86-64 build), avx2 (4 doubles) or avx512 (8 doubles). Every level gives the same bits.
+enum class Level { base = 0, avx2 = 1, avx512 = 2 };
+namespace detail {
+inline int& forced() {
+  static int level = -1;
+  return level;
+}
+}  // namespace detail
+/// The widest level this processor runs (base where SESI_SIMD_DISPATCH is 0).
+inline Level supported() {
+#if SESI_SIMD_DISPATCH
+  static const Level level = __builtin_cpu_supports("avx512f") ? Level::avx512
+                             : __builtin_cpu_supports("avx2")  ? Level::avx2
+                                                                : Level::base;
+  return level;
+#else
+  return Level::base;
+#endif
+}
+/// The level the kernel uses: supported(), or a lower one set by set_level (tests compare the
+/// levels' bits; not meant to change while a step runs).
+inline Level level() {
+  const int forced = detail::forced();
+  const Level top = supported();
+  return forced >= 0 && forced < static_cast<int>(top) ? static_cast<Level>(forced) : top;
+}
+inline void set_level(Level level) { detail::forced() = static_cast<int>(level); }
+}  // namespace sesi::simd
+
 /// SESI_FLATTEN: every call inside the function is inlined into it (GCC's flatten), for the
 /// few loops of the many-body step whose callees the inliner's unit-growth limits leave out of
 /// line in the program's large dispatch files (perf: Eigen's fixed-size copies, the arc

@@ -569,14 +569,29 @@ class NeighbourIndex {
     order_.resize(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) order_[static_cast<std::size_t>(i)] = i;
     if (n == 0) return;
-    key_low_.assign(static_cast<std::size_t>(keys_), std::numeric_limits<std::int64_t>::max());
+    // The keys' bounding box: each chunk's on threads, then joined (min and max: any order).
+    const int chunks = parallel::chunks_for(n);
+    const std::size_t K = static_cast<std::size_t>(keys_);
+    chunk_low_.assign(static_cast<std::size_t>(chunks) * K, std::numeric_limits<std::int64_t>::max());
+    chunk_high_.assign(static_cast<std::size_t>(chunks) * K, std::numeric_limits<std::int64_t>::min());
+    parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
+      std::int64_t* low = chunk_low_.data() + static_cast<std::size_t>(c) * K;
+      std::int64_t* up = chunk_high_.data() + static_cast<std::size_t>(c) * K;
+      for (int i = begin; i < end; ++i) {
+        const std::int64_t* k = key_ptr(i);
+        for (std::size_t d = 0; d < K; ++d) {
+          low[d] = std::min(low[d], k[d]);
+          up[d] = std::max(up[d], k[d]);
+        }
+      }
+    });
+    key_low_.assign(K, std::numeric_limits<std::int64_t>::max());
     std::vector<std::int64_t>& high = key_high_;
-    high.assign(static_cast<std::size_t>(keys_), std::numeric_limits<std::int64_t>::min());
-    for (int i = 0; i < n; ++i) {
-      const std::int64_t* k = key_ptr(i);
-      for (int d = 0; d < keys_; ++d) {
-        key_low_[static_cast<std::size_t>(d)] = std::min(key_low_[static_cast<std::size_t>(d)], k[d]);
-        high[static_cast<std::size_t>(d)] = std::max(high[static_cast<std::size_t>(d)], k[d]);
+    high.assign(K, std::numeric_limits<std::int64_t>::min());
+    for (std::size_t c = 0; c < static_cast<std::size_t>(chunks); ++c) {
+      for (std::size_t d = 0; d < K; ++d) {
+        key_low_[d] = std::min(key_low_[d], chunk_low_[c * K + d]);
+        high[d] = std::max(high[d], chunk_high_[c * K + d]);
       }
     }
     // The cells of the bounding box, while below 2^62 (keys lie within +-2^60: no overflow).
@@ -603,19 +618,42 @@ class NeighbourIndex {
       }
       cell_number_[static_cast<std::size_t>(i)] = number;
     });
-    // LSD radix sort, 11 bits a pass: stable, so ties stay in index order.
+    // LSD radix sort, 11 bits a pass: stable, so ties stay in index order. Each pass on threads
+    // by chunks of order_ (Satish, Harris & Garland, IPDPS 2009): a histogram per chunk, the
+    // offsets bucket by bucket and within a bucket chunk by chunk, then each chunk scatters its
+    // bodies in order. The result is the one stable order, whatever the chunks.
     constexpr int bits = 11;
     constexpr std::size_t buckets = std::size_t(1) << bits;
     int passes = 0;
     while (passes * bits < 64 && (count - 1) >> (passes * bits) != 0) ++passes;
     order_tmp_.resize(static_cast<std::size_t>(n));
-    bucket_.resize(buckets + 1);
+    bucket_.resize(buckets * static_cast<std::size_t>(chunks));
+    const auto digit = [&](int i, int shift) {
+      return static_cast<std::size_t>((cell_number_[static_cast<std::size_t>(i)] >> shift) & (buckets - 1));
+    };
     for (int pass = 0; pass < passes; ++pass) {
       const int shift = pass * bits;
       std::fill(bucket_.begin(), bucket_.end(), 0);
-      for (int i : order_) ++bucket_[((cell_number_[static_cast<std::size_t>(i)] >> shift) & (buckets - 1)) + 1];
-      for (std::size_t b = 1; b <= buckets; ++b) bucket_[b] += bucket_[b - 1];
-      for (int i : order_) order_tmp_[static_cast<std::size_t>(bucket_[(cell_number_[static_cast<std::size_t>(i)] >> shift) & (buckets - 1)]++)] = i;
+      parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
+        int* count_of = bucket_.data() + static_cast<std::size_t>(c) * buckets;
+        for (int s = begin; s < end; ++s) ++count_of[digit(order_[static_cast<std::size_t>(s)], shift)];
+      });
+      int at = 0;  // counts -> first slots
+      for (std::size_t b = 0; b < buckets; ++b) {
+        for (std::size_t c = 0; c < static_cast<std::size_t>(chunks); ++c) {
+          int& slot = bucket_[c * buckets + b];
+          const int here = slot;
+          slot = at;
+          at += here;
+        }
+      }
+      parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
+        int* next = bucket_.data() + static_cast<std::size_t>(c) * buckets;
+        for (int s = begin; s < end; ++s) {
+          const int i = order_[static_cast<std::size_t>(s)];
+          order_tmp_[static_cast<std::size_t>(next[digit(i, shift)]++)] = i;
+        }
+      });
       order_.swap(order_tmp_);
     }
   }
@@ -858,6 +896,7 @@ class NeighbourIndex {
   std::vector<int> order_tmp_, bucket_;  // sort_by_key's radix sort
   std::vector<std::uint64_t> cell_number_;         // sort_by_key: per body, its cell's number in the keys' box
   std::vector<std::int64_t> key_low_, key_high_;  // sort_by_key: the keys' bounding box
+  std::vector<std::int64_t> chunk_low_, chunk_high_;  // sort_by_key: each chunk's
   std::vector<std::int64_t> cell_key_;  // per occupied cell, keys_ each, ascending
   std::vector<int> cell_start_;         // cell c holds order_[cell_start_[c] .. cell_start_[c+1])
   std::vector<Scratch> scratch_;        // per chunk of build_rows

@@ -110,18 +110,21 @@ struct Workspace : TrigStore<Chart> {
   /// are rebuilt whenever they do not fit the points (VerletList::update).
   void share_lists(Workspace* other) { borrowed.lists = other ? &other->verlet : nullptr; }
   std::vector<VerletList<Chart>>& lists() { return borrowed.lists ? *borrowed.lists : verlet; }
-  /// The tiles' partial gradients and energies (System's symmetric pair sums on threads).
-  std::vector<Scalar> tile_gradients, tile_energies;
+  /// The tiles' partial gradients (System's symmetric pair sums on threads).
+  std::vector<Scalar> tile_gradients;
+  /// A domain's points of every body of the whole simulation (System::set_whole_run: pair terms
+  /// without a cutoff).
+  AmbientMatrix whole;
   /// System::patch_gradient's marks (one per body) and the bodies whose rows it recomputes.
   std::vector<char> marks;
   std::vector<int> affected;
-  /// The pair sums through Verlet lists (System::add_gradient_by_pairs): per list entry (i, j)
-  /// with j > i, the pair's dW/dd / sn and 1 - cs; per entry with j < i, the entry (j, i) that
-  /// holds them (mirror), for the lists of build mirror_builds of term mirror_term.
+  /// The pair sums through Verlet lists (System::add_gradient_by_pairs) of the lists pair_lists
+  /// at build pair_builds: their pairs i < j in row order (pair_first, pair_second; pair_base:
+  /// each row's first pair), each list entry's pair (pair_of), and per pair dW/dd / sn and 1 - cs.
   std::vector<Scalar> pair_dw, pair_omc;
-  std::vector<int> mirror;
-  const NeighbourLists* mirror_lists = nullptr;
-  long mirror_builds = -1;
+  std::vector<int> pair_first, pair_second, pair_base, pair_of;
+  const NeighbourLists* pair_lists = nullptr;
+  long pair_builds = -1;
   /// The state's cluster frame C (State::cluster) while the terms are evaluated: external terms
   /// see their centres in the cluster's frame (or, without a centre, world points C x).
   Eigen::Matrix<Scalar, ambient_dimension, ambient_dimension> cluster;
@@ -307,6 +310,33 @@ class System {
   }
   /// Whether this system is a domain of a simulation across processes (set_domain).
   bool domain() const { return domain_; }
+  /// A domain's view of the whole simulation, for pair terms without a cutoff (whole_run_terms):
+  /// each body this process owns pairs with every body of the whole simulation, not only with
+  /// its halo. ids: each body's index in the whole simulation; own: the bodies this process owns
+  /// (indices here, ascending); masses: the whole simulation's; gather(local, rows, whole): the
+  /// own bodies' columns of local (rows x bodies(), column-major) from every process into whole
+  /// (rows x masses.size(), in the whole simulation's body order), on every process (a collective
+  /// call, made at every evaluation of such a term). An own body's sums are then one process's
+  /// to the bit (add_whole_run_gradient).
+  using Gather = std::function<void(const Scalar* local, int rows, Scalar* whole)>;
+  void set_whole_run(std::vector<int> ids, std::vector<int> own, std::vector<Scalar> masses, Gather gather) {
+    whole_ids_ = std::move(ids);
+    whole_own_ = std::move(own);
+    whole_masses_ = std::move(masses);
+    gather_ = std::move(gather);
+  }
+  /// Whether an active pair term has no cutoff: every body's force depends on every body.
+  bool whole_run_terms() const {
+    bool any = false;
+    std::apply([&](const auto&... term) {
+      ((any = any || (long_range<std::remove_cvref_t<decltype(term)>> && !inactive(term))), ...);
+    }, terms_);
+    return any;
+  }
+  /// A new stamp (instance()): a stepper's gradient kept for this system is dropped, as for
+  /// another system, and the next kick evaluates afresh (the same bits as the kept one where
+  /// nothing changed).
+  void renew_instance() { instance_ = detail::InstanceStamp(); }
   /// The sum of rows over bodies: in body order, or the domain's.
   Scalar sum_rows(const std::vector<Scalar>& rows) const {
     return row_sum_ ? row_sum_(rows) : parallel::sum_in_order(rows);
@@ -427,7 +457,9 @@ class System {
 
   /// Ambient gradients of the potential for all bodies into w.G (w.X must hold the points).
   void ambient_gradient(Workspace& w) const {
-    w.G.setZero();
+    // Zeroed on threads (at 10^5 bodies a serial setZero was a third of a step's serial time).
+    parallel::for_chunks(static_cast<int>(w.G.cols()), parallel::chunks_for(static_cast<int>(w.G.cols())),
+                         [&](int begin, int end, int) { w.G.middleCols(begin, end - begin).setZero(); });
     int index = 0;
     std::apply([&](const auto&... term) { (add_embedded_gradient(term, w, index++), ...); }, terms_);
   }
@@ -500,8 +532,11 @@ class System {
       // (the lists the kick used fit them) and at the new ones (a body may have moved: a user's
       // change of the state between steps), so that no row keeps a changed body's old share.
       std::array<const NeighbourLists*, sizeof...(Terms)> lists{};  // each short-range term's
-      w.marks.assign(static_cast<std::size_t>(n), 0);
-      for (const int b : changed) w.marks[static_cast<std::size_t>(b)] = 1;
+      // Marks are set for the bodies collected in w.affected and cleared again at the end: no
+      // pass over all the bodies (a serial one was most of a step's serial time at 10^5 bodies).
+      w.marks.resize(static_cast<std::size_t>(n), 0);
+      w.affected.clear();
+      for (const int b : changed) mark(w, b);
       int index = 0;
       std::apply([&](const auto&... term) { (mark_partners(term, w, changed, index++, lists), ...); }, terms_);
       // The changed bodies' trig and world points, as refresh and embed_cached compute them.
@@ -521,10 +556,8 @@ class System {
       }
       index = 0;  // (lists are symmetric: a row that sees b is a row b sees)
       std::apply([&](const auto&... term) { (mark_partners(term, w, changed, index++, lists), ...); }, terms_);
-      w.affected.clear();
-      for (int b = 0; b < n; ++b) {
-        if (w.marks[static_cast<std::size_t>(b)]) w.affected.push_back(b);
-      }
+      std::sort(w.affected.begin(), w.affected.end());
+      for (const int b : w.affected) w.marks[static_cast<std::size_t>(b)] = 0;
       const int count = static_cast<int>(w.affected.size());
       w.ensure_scratch(parallel::chunks_for(count), dim(), ambient_dim());
       const auto rows = [&](int begin, int end, int c) {
@@ -637,6 +670,9 @@ class System {
         static_cast<void>(index);
         return std::numeric_limits<Scalar>::quiet_NaN();
       } else {
+        if constexpr (long_range<Term>) {
+          if (whole_run()) return whole_run_laplacian(term, w);
+        }
         // Each body sums Delta_i W(d_ij) over all its partners j (both ends of a pair count).
         const NeighbourLists* lists = by_rows() ? lists_of(term, w, index) : nullptr;
         const Scalar reach2 = reach2_of(term);
@@ -691,7 +727,12 @@ class System {
                         int k, Scalar reach2) const {
     sc.y = w.X.col(j);
     to_image(sc, k);
-    const Scalar mi = mass(i), mj = mass(j);
+    return pair_laplacian_of(term, sc, mass(i), mass(j), reach2);
+  }
+  /// The same of the points sc.x, sc.y (of masses mi, mj).
+  template <class Term>
+  Scalar pair_laplacian_of(const Term& term, typename Workspace::Scratch& sc, Scalar mi, Scalar mj,
+                           Scalar reach2) const {
     const int n = dim();
     if constexpr (HasPairGeometry<Chart>) {
       const PairGeometry<Scalar> g = chart_.pair_geometry(sc.x, sc.y);
@@ -843,6 +884,13 @@ class System {
       return true;  // the body alone
     }
   }
+  /// Marks body b (w.marks) and collects it in w.affected, once.
+  static void mark(Workspace& w, int b) {
+    char& m = w.marks[static_cast<std::size_t>(b)];
+    if (m) return;
+    m = 1;
+    w.affected.push_back(b);
+  }
   /// Marks (w.marks) every partner of a changed body in a short-range term's Verlet lists,
   /// brought up to date at w.X, and keeps them in lists[index].
   template <class Term>
@@ -854,7 +902,7 @@ class System {
       const NeighbourLists* list = lists_of(term, w, index);
       lists[static_cast<std::size_t>(index)] = list;
       for (const int b : changed) {
-        for_partners(list, b, /*upper=*/false, [&](int j, int) { w.marks[static_cast<std::size_t>(j)] = 1; });
+        for_partners(list, b, /*upper=*/false, [&](int j, int) { mark(w, j); });
       }
     } else {
       static_cast<void>(term);
@@ -974,7 +1022,11 @@ class System {
                     Scalar reach2) const {
     sc.y = w.X.col(j);
     to_image(sc, k);
-    const Scalar mi = mass(i), mj = mass(j);
+    return pair_value_of(term, sc, mass(i), mass(j), reach2);
+  }
+  /// W of the pair of points sc.x, sc.y (of masses mi, mj).
+  template <class Term>
+  Scalar pair_value_of(const Term& term, typename Workspace::Scratch& sc, Scalar mi, Scalar mj, Scalar reach2) const {
     if constexpr (HasPairGeometry<Chart>) {
       const PairGeometry<Scalar> g = chart_.pair_geometry(sc.x, sc.y);
       if (g.chord2 >= reach2) return Scalar(0);  // (a NaN chord goes on, and stays NaN)
@@ -995,7 +1047,12 @@ class System {
   template <bool Both, class Term, class GI, class GJ>
   void add_pair_gradient(const Term& term, typename Workspace::Scratch& sc, int i, int j, Scalar reach2,
                          GI&& gi, GJ&& gj) const {
-    const Scalar mi = mass(i), mj = mass(j);
+    add_pair_gradient_of<Both>(term, sc, mass(i), mass(j), reach2, std::forward<GI>(gi), std::forward<GJ>(gj));
+  }
+  /// The same for points of masses mi, mj.
+  template <bool Both, class Term, class GI, class GJ>
+  void add_pair_gradient_of(const Term& term, typename Workspace::Scratch& sc, Scalar mi, Scalar mj, Scalar reach2,
+                            GI&& gi, GJ&& gj) const {
     if constexpr (HasPairGeometry<Chart>) {
       const PairGeometry<Scalar> g = chart_.pair_geometry(sc.x, sc.y);
       if (g.chord2 >= reach2) return;
@@ -1045,12 +1102,18 @@ class System {
   /// dW/dd / sn of a pair term of the geodesic distance on its pair geometry g.
   template <class Term>
   SESI_INLINE Scalar derivative_over_sn(const Term& term, const PairGeometry<Scalar>& g, Scalar mi, Scalar mj) const {
-    if constexpr (requires { term.derivative_over_sn(chart_, g, mi, mj); }) {
-      return term.derivative_over_sn(chart_, g, mi, mj);
+    return derivative_over_sn_on(chart_, term, g, mi, mj);
+  }
+  /// The same on a given chart (pair_block's local copy).
+  template <class Term>
+  SESI_INLINE static Scalar derivative_over_sn_on(const Chart& chart, const Term& term, const PairGeometry<Scalar>& g,
+                                                  Scalar mi, Scalar mj) {
+    if constexpr (requires { term.derivative_over_sn(chart, g, mi, mj); }) {
+      return term.derivative_over_sn(chart, g, mi, mj);
     } else if constexpr (AlgebraicPairTerm<Term, Chart>) {
-      return term.derivative(chart_, g, mi, mj) / g.sn;
+      return term.derivative(chart, g, mi, mj) / g.sn;
     } else {
-      return term.derivative(chart_, chart_.distance_of(g), mi, mj) / g.sn;
+      return term.derivative(chart, chart.distance_of(g), mi, mj) / g.sn;
     }
   }
   /// The rows of the many-body step: a term of the geodesic distance through a Verlet list, on
@@ -1089,51 +1152,157 @@ class System {
   }
   /// The many-body gradient through Verlet lists, each pair's costly part once (Newton's third
   /// law, as LAMMPS' half lists) with the rows' sums as add_row_gradient forms them, bit for bit:
-  /// first, on threads by rows, every pair i < j of the lists gets dw = dW/dd / sn and 1 - cs
-  /// (symmetric in i and j to the bit: |x - y| = |y - x|, |x + y| = |y + x|, and the term is a
-  /// function of the pair); then each row i sums dw ((x_i - x_j) - (1 - cs) x_i) over its partners
-  /// in ascending order, reading a pair j < i where row j stored it (the mirror entry).
+  /// first, on threads by blocks of pairs, every pair i < j of the lists gets dw = dW/dd / sn and
+  /// 1 - cs (symmetric in i and j to the bit: |x - y| = |y - x|, |x + y| = |y + x|, and the term
+  /// is a function of the pair), in the vector loops of pair_block; then each row i sums
+  /// dw ((x_i - x_j) - (1 - cs) x_i) over its partners in ascending order, on threads by rows.
   template <class Term>
   void add_gradient_by_pairs(const Term& term, Workspace& w, const NeighbourLists& lists, long builds,
                              Scalar reach2) const {
-    if (w.mirror_lists != &lists || w.mirror_builds != builds) {
-      // Rows are sorted: entry (j, i) is found by bisection in row j.
-      reserve_with_slack(w.mirror, lists.index.size());
-      w.mirror.resize(lists.index.size());
-      for_bodies(w, [&](int i, typename Workspace::Scratch&) {
-        for (int e = lists.begin(i); e < lists.end(i); ++e) {
-          const int j = lists.index[static_cast<std::size_t>(e)];
-          if (j > i) break;
-          const int* first = lists.index.data() + lists.begin(j);
-          const int* at = std::lower_bound(first, lists.index.data() + lists.end(j), i);
-          w.mirror[static_cast<std::size_t>(e)] = static_cast<int>(at - lists.index.data());
-        }
-      });
-      w.mirror_lists = &lists;
-      w.mirror_builds = builds;
+    if constexpr (requires { term.vector_kernel(); }) {
+      // A term of the same bits that the vector loop inlines whole (ShortPairTerms' one term).
+      if (const auto kernel = term.vector_kernel()) return add_gradient_by_pairs(*kernel, w, lists, builds, reach2);
     }
-    reserve_with_slack(w.pair_dw, lists.index.size());
-    reserve_with_slack(w.pair_omc, lists.index.size());
-    w.pair_dw.resize(lists.index.size());
-    w.pair_omc.resize(lists.index.size());
-    for_bodies(w, [&](int i, typename Workspace::Scratch&) { pairs_of_row(term, w, lists, reach2, i); });
+    if (w.pair_lists != &lists || w.pair_builds != builds) index_pairs(w, lists);
+    w.pair_lists = &lists;
+    w.pair_builds = builds;
+    const int pairs = static_cast<int>(w.pair_first.size());
+    w.pair_dw.resize(static_cast<std::size_t>(pairs));
+    w.pair_omc.resize(static_cast<std::size_t>(pairs));
+    // Chunks of whole blocks: a pair's bits do not depend on its block, nor on the thread.
+    const int blocks = (pairs + pair_block_size - 1) / pair_block_size;
+    const simd::Level level = simd::level();
+    parallel::for_chunks(blocks, std::max(1, std::min(blocks, parallel::chunks_for(bodies()))),
+                         [&](int begin, int end, int) {
+                           const int k0 = begin * pair_block_size, k1 = std::min(pairs, end * pair_block_size);
+                           pair_blocks(level, term, w, reach2, k0, k1);
+                         });
     for_bodies(w, [&](int i, typename Workspace::Scratch&) { sum_of_row(w, lists, i); });
   }
-  /// add_gradient_by_pairs' first pass on row i: its pairs i < j.
+  /// The lists' pairs i < j in row order (w.pair_first, w.pair_second) and each entry's pair
+  /// (w.pair_of: entry (i, j) and its mirror (j, i) name the same pair), after a rebuild.
+  void index_pairs(Workspace& w, const NeighbourLists& lists) const {
+    const int n = lists.bodies();
+    // Row i's pairs are its entries j > i, the last ones of its sorted row.
+    w.pair_base.resize(static_cast<std::size_t>(n) + 1);
+    for_bodies(w, [&](int i, typename Workspace::Scratch&) {
+      const int* first = lists.index.data() + lists.begin(i);
+      const int* last = lists.index.data() + lists.end(i);
+      w.pair_base[static_cast<std::size_t>(i) + 1] = static_cast<int>(last - std::upper_bound(first, last, i));
+    });
+    w.pair_base[0] = 0;
+    for (int i = 0; i < n; ++i) w.pair_base[static_cast<std::size_t>(i) + 1] += w.pair_base[static_cast<std::size_t>(i)];
+    const std::size_t pairs = static_cast<std::size_t>(w.pair_base[static_cast<std::size_t>(n)]);
+    reserve_with_slack(w.pair_first, pairs);
+    reserve_with_slack(w.pair_second, pairs);
+    reserve_with_slack(w.pair_of, lists.index.size());
+    reserve_with_slack(w.pair_dw, pairs);
+    reserve_with_slack(w.pair_omc, pairs);
+    w.pair_first.resize(pairs);
+    w.pair_second.resize(pairs);
+    w.pair_of.resize(lists.index.size());
+    // Row i's upper entries start at its end less its pair count; entry (i, j), j < i, is row
+    // j's entry for i, found by bisection in row j's upper entries.
+    const auto upper = [&](int r) { return lists.end(r) - (w.pair_base[static_cast<std::size_t>(r) + 1] - w.pair_base[static_cast<std::size_t>(r)]); };
+    for_bodies(w, [&](int i, typename Workspace::Scratch&) {
+      const int up = upper(i);
+      for (int e = lists.begin(i); e < lists.end(i); ++e) {
+        const int j = lists.index[static_cast<std::size_t>(e)];
+        int k;
+        if (e >= up) {
+          k = w.pair_base[static_cast<std::size_t>(i)] + (e - up);
+          w.pair_first[static_cast<std::size_t>(k)] = i;
+          w.pair_second[static_cast<std::size_t>(k)] = j;
+        } else {
+          const int* first = lists.index.data() + upper(j);
+          const int* at = std::lower_bound(first, lists.index.data() + lists.end(j), i);
+          k = w.pair_base[static_cast<std::size_t>(j)] + static_cast<int>(at - first);
+        }
+        w.pair_of[static_cast<std::size_t>(e)] = k;
+      }
+    });
+  }
+  /// Pairs per block of pair_block: its arrays stay in L1 (5 x 64 doubles).
+  static constexpr int pair_block_size = 64;
+  /// pair_block on pairs [k0, k1) at the vector width of level (the same bits at every level).
   template <class Term>
-  SESI_FLATTEN void pairs_of_row(const Term& term, Workspace& w, const NeighbourLists& lists, Scalar reach2,
-                                 int i) const {
-    const AmbientVectorOf x = w.X.col(i);
-    const Scalar mi = mass(i);
-    for (int e = lists.end(i) - 1; e >= lists.begin(i); --e) {
-      const int j = lists.index[static_cast<std::size_t>(e)];
-      if (j < i) break;
-      const AmbientVectorOf y = w.X.col(j);
-      const PairGeometry<Scalar> g = chart_.pair_geometry(x, y);
-      // Beyond the reach: no force (a NaN chord goes on, and stays NaN).
-      w.pair_dw[static_cast<std::size_t>(e)] = g.chord2 >= reach2 ? Scalar(0) : derivative_over_sn(term, g, mi, mass(j));
-      w.pair_omc[static_cast<std::size_t>(e)] = g.one_minus_cs;
+  void pair_blocks(simd::Level level, const Term& term, Workspace& w, Scalar reach2, int k0, int k1) const {
+#if SESI_SIMD_DISPATCH
+    if (level == simd::Level::avx512) return pair_blocks_avx512(term, w, reach2, k0, k1);
+    if (level == simd::Level::avx2) return pair_blocks_avx2(term, w, reach2, k0, k1);
+#else
+    static_cast<void>(level);
+#endif
+    pair_block<false>(term, w, reach2, k0, k1);
+  }
+#if SESI_SIMD_DISPATCH
+  template <class Term>
+  SESI_TARGET_AVX512 void pair_blocks_avx512(const Term& term, Workspace& w, Scalar reach2, int k0, int k1) const {
+    pair_block<true>(term, w, reach2, k0, k1);
+  }
+  template <class Term>
+  SESI_TARGET_AVX2 void pair_blocks_avx2(const Term& term, Workspace& w, Scalar reach2, int k0, int k1) const {
+    pair_block<true>(term, w, reach2, k0, k1);
+  }
+#endif
+  /// add_gradient_by_pairs' first pass on pairs [k0, k1), a block of pair_block_size at a time:
+  /// each pair's geometry (a gather of two points, one square root), then dw over the block in
+  /// a loop that vectorises (simd: the term's distance and derivative, two divisions, selects
+  /// for its branches; measured in `sesi bench --scaling`, docs/benchmarks.md). At the base
+  /// width (SSE2's two doubles) the vector loop was slower than the scalar one, so it stays
+  /// scalar there.
+  template <bool simd, class Term>
+  SESI_INLINE void pair_block(const Term& term, Workspace& w, Scalar reach2, int k0, int k1) const {
+    // Local copies: the chart's and the term's parameters read through `this` or a reference
+    // are loads inside the term's branches (a cutoff), which keep GCC from if-converting the
+    // loop, and so from vectorising it.
+    const Chart chart = chart_;
+    const auto& kernel = plain_copy(term);
+    alignas(64) Scalar c2[pair_block_size], cc2[pair_block_size], sn[pair_block_size], omc[pair_block_size];
+    alignas(64) Scalar mi[pair_block_size], mj[pair_block_size];
+    for (int b = k0; b < k1; b += pair_block_size) {
+      const int m = std::min(pair_block_size, k1 - b);
+      for (int t = 0; t < m; ++t) {
+        const int i = w.pair_first[static_cast<std::size_t>(b + t)], j = w.pair_second[static_cast<std::size_t>(b + t)];
+        const AmbientVectorOf x = w.X.col(i), y = w.X.col(j);
+        const PairGeometry<Scalar> g = chart_.pair_geometry(x, y);
+        c2[t] = g.chord2;
+        cc2[t] = g.cochord2;
+        sn[t] = g.sn;
+        omc[t] = g.one_minus_cs;
+        mi[t] = mass(i);
+        mj[t] = mass(j);
+      }
+      Scalar* dw = w.pair_dw.data() + b;
+      if constexpr (simd) {
+        SESI_PRAGMA_SIMD
+        for (int t = 0; t < m; ++t) dw[t] = block_dw(chart, kernel, c2[t], cc2[t], sn[t], omc[t], mi[t], mj[t], reach2);
+      } else {
+        for (int t = 0; t < m; ++t) dw[t] = block_dw(chart, kernel, c2[t], cc2[t], sn[t], omc[t], mi[t], mj[t], reach2);
+      }
+      std::copy(omc, omc + m, w.pair_omc.data() + b);
     }
+  }
+  /// A local copy of term where that is a copy of bytes, else term itself (pair_block).
+  template <class Term>
+  static decltype(auto) plain_copy(const Term& term) {
+    if constexpr (std::is_trivially_copyable_v<Term>) {
+      return Term(term);
+    } else {
+      return (term);
+    }
+  }
+  /// One pair's dw in pair_block: 0 beyond the reach (a NaN chord goes on, and stays NaN).
+  template <class Term>
+  SESI_INLINE static Scalar block_dw(const Chart& chart, const Term& term, Scalar c2, Scalar cc2, Scalar sn, Scalar omc,
+                                     Scalar mi, Scalar mj, Scalar reach2) {
+    PairGeometry<Scalar> g;
+    g.chord2 = c2;
+    g.cochord2 = cc2;
+    g.sn = sn;
+    g.one_minus_cs = omc;
+    const Scalar f = derivative_over_sn_on(chart, term, g, mi, mj);
+    return c2 >= reach2 ? Scalar(0) : f;
   }
   /// add_gradient_by_pairs' second pass on row i: the row's sum into w.G.col(i).
   SESI_FLATTEN void sum_of_row(Workspace& w, const NeighbourLists& lists, int i) const {
@@ -1141,12 +1310,12 @@ class System {
     AmbientVectorOf acc = AmbientVectorOf::Zero();
     for (int e = lists.begin(i); e < lists.end(i); ++e) {
       const int j = lists.index[static_cast<std::size_t>(e)];
-      const std::size_t slot = static_cast<std::size_t>(j > i ? e : w.mirror[static_cast<std::size_t>(e)]);
-      const Scalar dw = w.pair_dw[slot];
+      const std::size_t k = static_cast<std::size_t>(w.pair_of[static_cast<std::size_t>(e)]);
+      const Scalar dw = w.pair_dw[k];
       if (dw == Scalar(0)) continue;  // beyond a cutoff
       const AmbientVectorOf y = w.X.col(j);
       AmbientVectorOf u = x - y;
-      u -= w.pair_omc[slot] * x;
+      u -= w.pair_omc[k] * x;
       if constexpr (requires { chart_.lower(u); }) chart_.lower(u);
       acc += dw * u;
     }
@@ -1167,10 +1336,11 @@ class System {
     int first(int I) const { return I * block; }
     int last(int I) const { return std::min(n, (I + 1) * block); }
   };
-  Tiling tiling() const {
+  Tiling tiling() const { return tiling_of(bodies()); }
+  /// The tiles of n bodies (a domain's: of the whole simulation's).
+  static Tiling tiling_of(int n) {
     // At most 48 blocks (1176 tiles: enough to balance any thread count this side of a node) of
     // at least 64 bodies (a tile's pairs outweigh its bookkeeping).
-    const int n = bodies();
     const int block = std::max(64, (n + 47) / 48);
     return Tiling{n, block, (n + block - 1) / block};
   }
@@ -1222,22 +1392,128 @@ class System {
       }
     });
   }
+  // ---- a domain's pair terms without a cutoff (set_whole_run) ---------------------------------
+  // Each own body's row against every body of the whole simulation, whose points every process
+  // gathers first (w.whole): no Newton's third law across processes, each pair's derivative is
+  // computed by the owners of both its bodies. The rows are one process's to the bit.
+
   template <class Term>
-  Scalar tiled_energy(const Term& term, Workspace& w) const {
-    const Tiling tl = tiling();
-    w.tile_energies.assign(static_cast<std::size_t>(tl.tiles()), Scalar(0));
-    w.ensure_scratch(std::min(tl.tiles(), 4 * parallel::threads()), dim(), ambient_dim());
-    const Scalar reach2 = reach2_of(term);
-    for_tiles(tl, [&](int t, int I, int J, int c) {
+  static constexpr bool long_range = PairTerm<Term, Chart> && !ShortRangeTerm<Term, Chart>;
+  bool whole_run() const { return static_cast<bool>(gather_); }
+  Scalar whole_mass(int b) const { return whole_masses_[static_cast<std::size_t>(b)]; }
+  /// w.whole = the whole simulation's points (w.X's own columns from every process).
+  void gather_whole(Workspace& w) const {
+    const int n = static_cast<int>(whole_masses_.size()), a = ambient_dim();
+    if (w.whole.rows() != a || w.whole.cols() != n) w.whole.resize(a, n);
+    gather_(w.X.data(), a, w.whole.data());
+  }
+  /// f(l, b, scratch) for each own body (l: its index here, b: in the whole simulation), on
+  /// threads: a row has every body as a partner, so a few own bodies fill the threads.
+  template <class F>
+  void for_own(Workspace& w, F&& f) const {
+    const int n = static_cast<int>(whole_own_.size());
+    const int chunks = std::max(1, std::min(n, 4 * parallel::threads()));
+    w.ensure_scratch(chunks, dim(), ambient_dim());
+    parallel::for_chunks(n, chunks, [&](int begin, int end, int c) {
       typename Workspace::Scratch& sc = w.scratch[static_cast<std::size_t>(c)];
-      Scalar e(0);
-      for (int i = tl.first(I); i < tl.last(I); ++i) {
-        sc.x = w.X.col(i);
-        for (int j = I == J ? i + 1 : tl.first(J); j < tl.last(J); ++j) e += pair_value(term, sc, w, i, j, -1, reach2);
+      for (int k = begin; k < end; ++k) {
+        const int l = whole_own_[static_cast<std::size_t>(k)];
+        f(l, whole_ids_[static_cast<std::size_t>(l)], sc);
       }
-      w.tile_energies[static_cast<std::size_t>(t)] = e;
     });
-    return parallel::sum_in_order(w.tile_energies);
+  }
+  /// Each own body b's row of a term without a cutoff into w.G, as one process adds it: on a
+  /// quotient over every other body ascending (add_row_gradient); else b's shares of the tiles
+  /// of the whole simulation (add_tiled_gradient): for J ascending, where b's block I <= J the
+  /// share of tile (I, J), its pairs with block J (j > b on the diagonal) ascending from zero,
+  /// then where I >= J the share of tile (J, I), its pairs with block J (i < b) likewise. That
+  /// second end's gradient is computed as the tile computes it, the points and masses in the
+  /// tile's order (first index first): no symmetry of the term is assumed.
+  template <class Term>
+  void add_whole_run_gradient(const Term& term, Workspace& w) const {
+    gather_whole(w);
+    const int n = static_cast<int>(whole_masses_.size());
+    const Scalar reach2 = reach2_of(term);
+    for_own(w, [&](int l, int b, typename Workspace::Scratch& sc) {
+      if constexpr (on_quotient) {
+        sc.x = w.whole.col(b);
+        sc.acc.setZero();
+        for (int j = 0; j < n; ++j) {
+          if (j == b) continue;
+          sc.y = w.whole.col(j);
+          to_image(sc, -1);
+          add_pair_gradient_of<false>(term, sc, whole_mass(b), whole_mass(j), reach2, sc.acc, sc.acc);
+        }
+        w.G.col(l) += sc.acc;
+      } else {
+        const Tiling tl = tiling_of(n);
+        const int I = b / tl.block;
+        // The first end's gradient of a pair where b is the second: not b's (never read).
+        AmbientVectorOf unused = AmbientVectorOf::Zero(ambient_dim());
+        for (int J = 0; J < tl.blocks; ++J) {
+          if (I <= J) {
+            sc.x = w.whole.col(b);
+            sc.acc.setZero();
+            for (int j = I == J ? b + 1 : tl.first(J); j < tl.last(J); ++j) {
+              sc.y = w.whole.col(j);
+              add_pair_gradient_of<false>(term, sc, whole_mass(b), whole_mass(j), reach2, sc.acc, sc.acc);
+            }
+            w.G.col(l) += sc.acc;
+          }
+          if (I >= J) {
+            sc.y = w.whole.col(b);
+            sc.acc.setZero();
+            for (int i = tl.first(J); i < (I == J ? b : tl.last(J)); ++i) {
+              sc.x = w.whole.col(i);
+              add_pair_gradient_of<true>(term, sc, whole_mass(i), whole_mass(b), reach2, unused, sc.acc);
+            }
+            w.G.col(l) += sc.acc;
+          }
+        }
+      }
+    });
+  }
+  /// The energy of a term without a cutoff as one process sums it (term_energy's rows): own
+  /// body b's row is its pairs with j > b ascending, the rows summed in the whole simulation's
+  /// body order (sum_rows).
+  template <class Term>
+  Scalar whole_run_energy(const Term& term, Workspace& w) const {
+    gather_whole(w);
+    const int n = static_cast<int>(whole_masses_.size());
+    const Scalar reach2 = reach2_of(term);
+    w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
+    for_own(w, [&](int l, int b, typename Workspace::Scratch& sc) {
+      sc.x = w.whole.col(b);
+      Scalar row(0);
+      for (int j = b + 1; j < n; ++j) {
+        sc.y = w.whole.col(j);
+        to_image(sc, -1);
+        row += pair_value_of(term, sc, whole_mass(b), whole_mass(j), reach2);
+      }
+      w.rows[static_cast<std::size_t>(l)] = row;
+    });
+    return sum_rows(w.rows);
+  }
+  /// The Laplacian sum of a term without a cutoff as one process sums it (term_laplacian's
+  /// rows): own body b's row over every other body ascending.
+  template <class Term>
+  Scalar whole_run_laplacian(const Term& term, Workspace& w) const {
+    gather_whole(w);
+    const int n = static_cast<int>(whole_masses_.size());
+    const Scalar reach2 = reach2_of(term);
+    w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
+    for_own(w, [&](int l, int b, typename Workspace::Scratch& sc) {
+      sc.x = w.whole.col(b);
+      Scalar row(0);
+      for (int j = 0; j < n; ++j) {
+        if (j == b) continue;
+        sc.y = w.whole.col(j);
+        to_image(sc, -1);
+        row += pair_laplacian_of(term, sc, whole_mass(b), whole_mass(j), reach2);
+      }
+      w.rows[static_cast<std::size_t>(l)] = row;
+    });
+    return sum_rows(w.rows);
   }
 
   /// The chord of sc.x, sc.y in the ambient metric, leaving G (x - y) in sc.g (as chord(w)).
@@ -1277,7 +1553,11 @@ class System {
     if (inactive(term)) return v;
     if constexpr (PairTerm<Term, Chart>) {
       if (by_rows()) {
-        if constexpr (!ShortRangeTerm<Term, Chart> && !on_quotient) return tiled_energy(term, w);
+        // A term without a cutoff as any other: row i sums its pairs i < j in ascending j (so a
+        // domain's rows, against the whole simulation's bodies, are one process's).
+        if constexpr (long_range<Term>) {
+          if (whole_run()) return whole_run_energy(term, w);
+        }
         const NeighbourLists* lists = lists_of(term, w, index);
         const Scalar reach2 = reach2_of(term);
         w.rows.assign(static_cast<std::size_t>(bodies()), Scalar(0));
@@ -1332,7 +1612,13 @@ class System {
     if (inactive(term)) return;
     if constexpr (PairTerm<Term, Chart>) {
       if (by_rows()) {
-        if constexpr (!ShortRangeTerm<Term, Chart> && !on_quotient) {
+        if constexpr (long_range<Term>) {
+          if (whole_run()) {
+            add_whole_run_gradient(term, w);
+            return;
+          }
+        }
+        if constexpr (long_range<Term> && !on_quotient) {
           add_tiled_gradient(term, w);
           return;
         }
@@ -1452,6 +1738,11 @@ class System {
   RowSum row_sum_;    // a domain's sums over its own bodies (set_domain)
   Drifted drifted_;   // a domain's halo refresh
   bool domain_ = false;
+  // A domain's whole simulation (set_whole_run): each body's index in it, the own bodies, its
+  // masses, the gather of its points.
+  std::vector<int> whole_ids_, whole_own_;
+  std::vector<Scalar> whole_masses_;
+  Gather gather_;
 };
 
 /// Deduction guide: System(chart, masses, terms...).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
@@ -28,12 +29,6 @@ namespace {
 /// What of scene a run across ranks cannot hold yet, or empty.
 std::string unsupported(const Scene& scene) {
   if (scene.space.genus != 0) return "a compact hyperbolic surface (genus)";
-  for (const PotentialSpec& spec : scene.potentials) {
-    if (std::holds_alternative<CotangentGravitySpec>(spec) || std::holds_alternative<HarmonicPairSpec>(spec) ||
-        std::holds_alternative<ChordWellSpec>(spec)) {
-      return "pair potentials without a cutoff ('" + std::string(potential_kind(spec)) + "')";
-    }
-  }
   // Below System::rows_from bodies one process sums pairs in another order (the symmetric loop).
   if (scene.body_count() < parallel::min_parallel_bodies) {
     return "fewer than " + std::to_string(parallel::min_parallel_bodies) + " bodies";
@@ -142,6 +137,8 @@ class DomainIntegrator final : public Integrator {
     double cutoff = 0.0;
     for (const PotentialSpec& spec : scene.potentials) {
       if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) cutoff = std::max(cutoff, lj->cutoff);
+      long_range_ = long_range_ || std::holds_alternative<CotangentGravitySpec>(spec) ||
+                    std::holds_alternative<HarmonicPairSpec>(spec) || std::holds_alternative<ChordWellSpec>(spec);
     }
     // The domain's skin: twice the Verlet lists' (at least twice their default), a fraction of
     // the cutoff. A cut costs more than a list rebuild (the bodies change ranks, each rank's
@@ -362,6 +359,30 @@ class DomainIntegrator final : public Integrator {
     return ranks_.from_root(total);
   }
 
+  /// The own bodies' columns of local (rows x this rank's bodies) from every rank into whole
+  /// (rows x the run's bodies, in body order), on every rank: the points of every body that pair
+  /// terms without a cutoff need at each evaluation (System::set_whole_run). One MPI_Allgatherv,
+  /// not a ring of K - 1 MPI_Sendrecv: a body's sum runs over its partners in the whole run's
+  /// body order, which interleaves the ranks' bodies, so no rank can start its rows before it
+  /// holds every point, and both end with the same copy.
+  void gather_whole(const double* local, int rows, double* whole) {
+    whole_mine_.clear();
+    whole_mine_.reserve(own_.size() * static_cast<std::size_t>(rows));
+    for (const int l : own_) whole_mine_.insert(whole_mine_.end(), local + rows * l, local + rows * (l + 1));
+    ranks_.all_gather(whole_mine_, whole_all_, whole_counts_);
+    if (whole_all_.size() != static_cast<std::size_t>(n_) * static_cast<std::size_t>(rows)) {
+      std::fprintf(stderr, "sesi: rank %d: a gather of the whole run of the wrong size\n", ranks_.rank());
+      ranks_.abort(3);
+    }
+    std::size_t at = 0;
+    for (const std::vector<int>& ids : owned_ids_) {
+      for (const int b : ids) {
+        std::copy_n(whole_all_.data() + at, rows, whole + static_cast<std::ptrdiff_t>(rows) * b);
+        at += static_cast<std::size_t>(rows);
+      }
+    }
+  }
+
   /// After a drift: the halo's q from the owners.
   void refresh_positions(double* q, int dim) {
     for (int r = 0; r < ranks_.size(); ++r) {
@@ -526,7 +547,8 @@ class DomainIntegrator final : public Integrator {
     send_.assign(static_cast<std::size_t>(K), {});
     received_.assign(static_cast<std::size_t>(K), {});
     owned_ids_.assign(static_cast<std::size_t>(K), {});
-    if (ranks_.root()) {
+    // (Every rank, for the whole run's points of pair terms without a cutoff: gather_whole.)
+    if (ranks_.root() || long_range_) {
       for (int b = 0; b < n_; ++b) owned_ids_[static_cast<std::size_t>(slabs.owner[static_cast<std::size_t>(b)])].push_back(b);
     }
     start_.resize(X.rows(), static_cast<Eigen::Index>(own_.size()));
@@ -569,6 +591,7 @@ class DomainIntegrator final : public Integrator {
     hooks.ids = ids_;
     hooks.bodies = n_;
     hooks.any = [this](bool value) { return ranks_.any(value); };
+    hooks.gather = [this](const double* local, int rows, double* whole) { gather_whole(local, rows, whole); };
     local_->set_domain(std::move(hooks));
     if (held) local_->restore(*held);
     if (packed) {
@@ -595,7 +618,11 @@ class DomainIntegrator final : public Integrator {
   std::vector<int> ids_, own_, halo_;
   std::vector<char> owned_;
   std::vector<std::vector<int>> send_to_, receive_from_;
-  std::vector<std::vector<int>> owned_ids_;  // rank 0: each rank's own bodies, ascending
+  // Each rank's own bodies, ascending: on rank 0 (gathered), and on every rank with long_range_.
+  std::vector<std::vector<int>> owned_ids_;
+  bool long_range_ = false;  // a pair term without a cutoff (gather_whole)
+  std::vector<double> whole_mine_, whole_all_;  // gather_whole's buffers
+  std::vector<int> whole_counts_;
   std::vector<std::vector<double>> send_, received_;
   Eigen::MatrixXd start_, moved_;  // own bodies' world points at the cut, and at the last step
   bool framed_ = false, framed_known_ = false;

@@ -29,8 +29,9 @@ namespace sesi::program {
 
 /// The integrator of scene across ranks (ranks.distributed()). Every call on it is collective:
 /// every rank makes it, in the same order (docs/parallel.md). Throws InputError (one line) for
-/// what a run across ranks does not support yet: a topology, H^n, a thermostat, a pair term
-/// without a cutoff, a geodesic or processed method, fewer bodies than System::rows_from (256).
+/// what a run across ranks does not support yet: a compact surface, a geodesic or processed
+/// method, fewer bodies than System::rows_from (256). Pair terms without a cutoff pair each own
+/// body with every body of the run (the points of all gathered at every evaluation).
 std::unique_ptr<Integrator> make_domain_integrator(const Scene& scene, const Ranks& ranks);
 
 }  // namespace sesi::program

@@ -125,8 +125,27 @@ class ChartIntegrator final : public Integrator {
   ChartIntegrator& operator=(const ChartIntegrator&) = delete;
 
   void step(double t, double h) override {
+    const bool framed = x_.framed();
+    if (whole_run_ && framed) {
+      for (std::size_t k = 0; k < own_.size(); ++k) own_frames_[k] = x_.frames[static_cast<std::size_t>(own_[k])];
+    }
     stepper_->step(x_, t, h);
-    if constexpr (topology) wrap();  // a thermostat's step too
+    bool wrapped = false;
+    if constexpr (topology) wrapped = wrap();  // a thermostat's step too
+    if (whole_run_) {
+      // A domain with pair terms without a cutoff: where a body anywhere was re-charted (its
+      // frame changed: a turn or a homing) or wrapped, one process evaluates every force afresh
+      // at the next step (System::patch_gradient cannot patch such terms), so every process
+      // does, even one whose bodies did not change: else it would reuse its kept gradient while
+      // the others gather the points for theirs.
+      bool changed = wrapped || framed != x_.framed();
+      if (framed && !changed) {
+        for (std::size_t k = 0; k < own_.size() && !changed; ++k) {
+          changed = own_frames_[k] != x_.frames[static_cast<std::size_t>(own_[k])];
+        }
+      }
+      if (any_(changed)) sys_.renew_instance();
+    }
     shown_valid_ = false;
     if (dt_ == 0.0) dt_ = h;  // a processed method's step, when the scene has none
   }
@@ -258,13 +277,18 @@ class ChartIntegrator final : public Integrator {
   int body_with_non_finite_energy() override {
     const sesi::State<Chart>& x = shown();
     typename Chart::Point q(sys_.dim()), p(sys_.dim());
-    for (int b = 0; b < sys_.bodies(); ++b) {
+    int bad = 0;
+    for (int b = 0; b < sys_.bodies() && bad == 0; ++b) {
       q = x.q.col(b);
       p = x.p.col(b);
-      if (!std::isfinite(sesi::kinetic_energy(sys_.chart(), q, p, sys_.mass(b)))) return b + 1;
+      if (!std::isfinite(sesi::kinetic_energy(sys_.chart(), q, p, sys_.mass(b)))) bad = b + 1;
     }
+    // (A domain's gradient with pair terms without a cutoff gathers from every process: each
+    // evaluates it, whatever its own bodies are.)
+    if (bad != 0 && !whole_run_) return bad;
     typename SystemOf<Chart>::StateType::Matrix gradient;
     sys_.potential_gradient(x, w_, gradient);
+    if (bad != 0) return bad;
     for (int b = 0; b < sys_.bodies(); ++b) {
       if (!gradient.col(b).allFinite()) return b + 1;
     }
@@ -302,6 +326,23 @@ class ChartIntegrator final : public Integrator {
     whole_bodies_ = hooks.bodies;
     any_ = std::move(hooks.any);
     halo_ = std::move(hooks.halo);
+    own_.clear();
+    for (int b = 0, h = 0; b < sys_.bodies(); ++b) {
+      if (h < static_cast<int>(halo_.size()) && halo_[static_cast<std::size_t>(h)] == b) {
+        ++h;
+      } else {
+        own_.push_back(b);
+      }
+    }
+    whole_run_ = hooks.gather && sys_.whole_run_terms();
+    if (whole_run_) {
+      // Pair terms without a cutoff: each own body pairs with every body of the whole run, whose
+      // masses come once and whose points come at every evaluation (a collective call).
+      std::vector<double> masses(static_cast<std::size_t>(whole_bodies_));
+      hooks.gather(sys_.masses().data(), 1, masses.data());
+      sys_.set_whole_run(hooks.ids, own_, std::move(masses), hooks.gather);
+      own_frames_.resize(own_.size());
+    }
     auto refresh = std::move(hooks.drifted);
     sys_.set_domain(std::move(hooks.sum), [this, refresh](sesi::State<Chart>& x, typename SystemOf<Chart>::Workspace& w) {
       refresh(x.q.data(), static_cast<int>(x.q.rows()), static_cast<int>(x.q.cols()));
@@ -492,19 +533,22 @@ class ChartIntegrator final : public Integrator {
   /// After a step: a topology's bodies back into its domain (sesi::wrap). A domain of a box
   /// wraps when any body of the whole simulation is out by more than the margin, as one process
   /// does (then every body out by any amount, the halo's alike with its owners').
-  void wrap() {
+  /// Whether a domain's bodies were wrapped (false for one process: nothing asks).
+  bool wrap() {
     if constexpr (topology) {
       if constexpr (!surface) {
         if (any_) {
           const auto& topo = sys_.chart().topology();
           bool far = false;
           for (int b = 0; b < x_.bodies() && !far; ++b) far = topo.outside(x_.q.col(b)) > margin_;
-          if (any_(far)) sesi::wrap(sys_, x_, images_, -1.0);
-          return;
+          if (!any_(far)) return false;
+          sesi::wrap(sys_, x_, images_, -1.0);
+          return true;
         }
       }
       sesi::wrap(sys_, x_, images_, margin_);
     }
+    return false;
   }
   /// with_thermostat's record into the thermostat (none: it stays as it is); not strict, only
   /// one of the same shape.
@@ -556,6 +600,11 @@ class ChartIntegrator final : public Integrator {
   typename SystemOf<Chart>::Workspace w_ = sys_.make_workspace();  // the diagnostics' own
   std::vector<std::vector<std::pair<int, int>>> close_;  // listed_close_pairs' buffers, per chunk
   std::vector<int> halo_;  // a domain's halo (set_domain)
+  std::vector<int> own_;   // a domain's own bodies (set_domain)
+  // A domain with pair terms without a cutoff (System::set_whole_run), and its own bodies'
+  // frames before a step (step: whether one was re-charted).
+  bool whole_run_ = false;
+  std::vector<typename sesi::State<Chart>::Frame> own_frames_;
   int whole_bodies_ = 0;   // a domain's whole simulation's body count (set_domain; 0: none)
   std::function<bool(bool)> any_;  // a domain's "on any process" (set_domain)
   // Processed methods (AnyStepper::processed): the step of the kernel's variables in

@@ -57,6 +57,10 @@ struct DomainHooks {
   int bodies = 0;
   /// Whether value holds on any process (a periodic box's wrap is the whole simulation's call).
   std::function<bool(bool)> any;
+  /// The own bodies' columns of local (rows x bodies, column-major; the halo's ignored) from
+  /// every process into whole (rows x the whole simulation's bodies, in its body order), on
+  /// every process: pair terms without a cutoff see every body (System::set_whole_run).
+  std::function<void(const double* local, int rows, double* whole)> gather;
 };
 
 class Integrator {

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -148,6 +149,21 @@ class ShortPairTerms : public PairSum<sesi::geodesic_distance, sesi::LennardJone
     double w = 0.0;
     for (const auto& term : lj_) w += term.derivative_over(space, d, g.sn);
     return w;
+  }
+  /// One Lennard-Jones term with the call above's bits, by value: the kernel's vector loop
+  /// (sesi::System::pair_block) inlines it with no branch on the number of terms.
+  struct OneTerm {
+    sesi::LennardJones<double> lj;
+    template <class Space>
+    SESI_INLINE double derivative_over_sn(const Space& space, const sesi::PairGeometry<double>& g, double,
+                                          double) const {
+      return 0.0 + lj.derivative_over(space, space.distance_of(g), g.sn);
+    }
+  };
+  /// The term the kernel's vector loop evaluates instead of this one (sesi::System::
+  /// add_gradient_by_pairs): OneTerm where there is one term, else none (this).
+  std::optional<OneTerm> vector_kernel() const {
+    return lj_.size() == 1 ? std::optional<OneTerm>(OneTerm{lj_.front()}) : std::nullopt;
   }
 
  private:

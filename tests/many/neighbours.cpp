@@ -135,13 +135,25 @@ void check_lists_equal_all_pairs(const Chart& chart, const sesi::State<Chart>& s
   CHECK(g_list.allFinite());
   CHECK((g_list.array() == g_all.array()).all());
   CHECK(e_list == e_all);
+  // The lists' pair loop at each vector width this processor runs (config.hpp, simd::level):
+  // lanes do a scalar's IEEE operations, with no contraction, so every width gives these bits.
+  using sesi::simd::Level;
+  for (const Level level : {Level::base, Level::avx2, Level::avx512}) {
+    if (static_cast<int>(level) > static_cast<int>(sesi::simd::supported())) continue;
+    sesi::simd::set_level(level);
+    INFO("vector level " << static_cast<int>(level));
+    const auto [g_level, e_level] = gradient_and_energy(sys, s, Search::automatic);
+    CHECK((g_level.array() == g_all.array()).all());
+  }
+  sesi::simd::set_level(Level::avx512);  // (back to the widest supported)
 }
 
 }  // namespace
 
-TEST_CASE("forces through the Verlet list equal the all-pairs rows to the bit") {
+TEST_CASE("forces through the Verlet list equal the all-pairs rows to the bit, at every vector width") {
   // Both sum each body's pairs in ascending order of the partner, so the sums are the same
   // floating-point operations in the same order.
+  MESSAGE("vector levels compared: base to " << static_cast<int>(sesi::simd::supported()) << " (0 base, 1 AVX2, 2 AVX-512)");
   const int n = 500;
   SUBCASE("S^2") {
     const sesi::Sphere<2, double> chart(radius_for(2, n));

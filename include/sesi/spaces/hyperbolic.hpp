@@ -153,7 +153,7 @@ class Hyperbolic {
     pullback(t, g, out);
   }
   void velocity(const Point& q, const Point& p, Scalar m, Ambient& v) const {
-    Point qd(dim_);
+    Point qd = Point::Zero(dim_);  // (zeroed: GCC 12 -O2 thinks qd[0] may be unset, dim_ >= 1 unseen)
     for (int i = 0; i < dim_; ++i) qd[i] = kinetic_dp(i, q, p[i], m);
     TrigType t;
     refresh(q, t);
