@@ -123,6 +123,8 @@ class KeptGradient {
   /// frames are x's already, as when the step reused the kept gradient: a copy the less).
   template <class Sys>
   void keep(const Sys& sys, const state_type& x, bool frames_kept = false) {
+    // changed_bodies' marks sized here, at the first step, so that no later step allocates.
+    if (marks_.size() != static_cast<std::size_t>(x.q.cols())) marks_.resize(static_cast<std::size_t>(x.q.cols()));
     system_ = &sys;
     if constexpr (requires { sys.instance(); }) instance_ = sys.instance();
     if (!frames_kept) copy_frames(x.frames);
