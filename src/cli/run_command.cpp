@@ -284,12 +284,23 @@ void print_profile(const sesi::profile::Report& r, const Scene& scene, const std
                100.0 * r.serial_fraction());
 }
 
-/// A sink that keeps nothing: the ranks but rank 0 of a run across ranks (rank 0 writes the outputs).
-class NullSink final : public RunSink {
+/// The sink of the ranks but rank 0 of a run across ranks: rank 0 writes the outputs, and these
+/// ranks serve it their own bodies' columns of each row and of the final state as it writes them
+/// (Snapshot::gather).
+class ServingSink final : public RunSink {
  public:
   void track(double, const Eigen::VectorXd&) override {}
-  void write_row(const Snapshot&) override {}
-  void set_final(Snapshot) override {}
+  void write_row(const Snapshot& s) override {
+    if (s.gather) s.gather->serve(s);
+  }
+  void set_final(Snapshot last) override { final_ = std::move(last); }
+  /// While rank 0 writes the summary (Recorder::finish, or release_final where it is not reached).
+  void serve_final() const {
+    if (final_.gather) final_.gather->serve(final_);
+  }
+
+ private:
+  Snapshot final_;
 };
 
 /// Refuse to run when a launcher started this process as one of several but MPI is not in use
@@ -400,8 +411,8 @@ int execute(const Ranks& ranks, Scene& scene, StagingDir* staging, bool quiet, b
     write_checkpoint(c, staging->path(), staging->target());
     checkpoint_step = c.step;
   };
-  NullSink nothing;
-  RunSink& sink = recorder ? static_cast<RunSink&>(*recorder) : nothing;
+  ServingSink serving;
+  RunSink& sink = recorder ? static_cast<RunSink&>(*recorder) : serving;
   RunControl control;
   control.interrupted = &signals::stop_requested();
   control.progress = progress ? &*progress : nullptr;
@@ -485,7 +496,10 @@ int execute(const Ranks& ranks, Scene& scene, StagingDir* staging, bool quiet, b
                                      : ", with the last good checkpoint (step " + std::to_string(checkpoint_step) + ")"));
     return exit_run_failed;
   };
-  if (!root) return static_cast<int>(ranks.from_root(static_cast<long>(exit_ok)));
+  if (!root) {
+    serving.serve_final();
+    return static_cast<int>(ranks.from_root(static_cast<long>(exit_ok)));
+  }
   if (!ranks.distributed()) return finish();
   // Across ranks every rank exits with rank 0's status, even after an error here.
   int status = exit_internal;
@@ -498,6 +512,7 @@ int execute(const Ranks& ranks, Scene& scene, StagingDir* staging, bool quiet, b
     print_error(e.what());
     status = exit_internal;
   }
+  recorder->release_final();  // (where finish() failed before the summary)
   return static_cast<int>(ranks.from_root(static_cast<long>(status)));
 }
 

@@ -21,6 +21,7 @@
 
 #include "errors.hpp"
 #include "geometry.hpp"
+#include "run_types.hpp"
 
 namespace sesi::program {
 
@@ -122,10 +123,81 @@ Slabs cut(const SpaceSpec& space, const Eigen::MatrixXd& X, int ranks, double ha
   return s;
 }
 
+/// A run's snapshots across ranks (Snapshot::gather): rank 0 asks for a block of bodies (a
+/// request broadcast: fields, first, count; none: done), each rank sends its own bodies in it
+/// ([index, fields] a body), and rank 0 puts them in body order.
+class RankGather final : public BodyGather {
+ public:
+  RankGather(const Ranks& ranks, int bodies) : ranks_(ranks), n_(bodies) {}
+  void fetch(const Snapshot& s, unsigned fields, Eigen::Index first, Eigen::Index count,
+             std::vector<double>& out) const override {
+    std::vector<double> request{static_cast<double>(fields), static_cast<double>(first), static_cast<double>(count)};
+    ranks_.from_root(request);
+    answer(s, fields, first, count, &out);
+  }
+  void done() const override {
+    std::vector<double> none;
+    ranks_.from_root(none);
+  }
+  void serve(const Snapshot& s) const override {
+    std::vector<double> request;
+    for (;;) {
+      request.clear();
+      ranks_.from_root(request);
+      if (request.size() != 3) return;
+      answer(s, static_cast<unsigned>(request[0]), static_cast<Eigen::Index>(request[1]),
+             static_cast<Eigen::Index>(request[2]), nullptr);
+    }
+  }
+  Eigen::Index bodies() const override { return n_; }
+  bool root() const override { return ranks_.root(); }
+  double shared(double value) const override { return ranks_.from_root(value); }
+
+ private:
+  void answer(const Snapshot& s, unsigned fields, Eigen::Index first, Eigen::Index count, std::vector<double>* out) const {
+    std::vector<std::pair<const double*, Eigen::Index>> parts;  // each field's data and rows
+    for (const auto& [field, m] : {std::pair{field_q, &s.q}, std::pair{field_p, &s.p}, std::pair{field_x, &s.x},
+                                   std::pair{field_v, &s.v}}) {
+      if ((fields & field) != 0) parts.emplace_back(m->data(), m->rows());
+    }
+    const Eigen::Index rn = (fields & field_n) != 0 ? s.image_counts.rows() : 0;
+    Eigen::Index stride = rn;
+    for (const auto& part : parts) stride += part.second;
+    mine_.clear();
+    const auto lo = std::lower_bound(s.ids.begin(), s.ids.end(), first);
+    const auto hi = std::lower_bound(lo, s.ids.end(), first + count);
+    for (auto at = lo; at != hi; ++at) {
+      const Eigen::Index k = at - s.ids.begin();
+      mine_.push_back(*at);
+      for (const auto& [data, rows] : parts) mine_.insert(mine_.end(), data + rows * k, data + rows * (k + 1));
+      for (Eigen::Index i = 0; i < rn; ++i) mine_.push_back(static_cast<double>(s.image_counts(i, k)));
+    }
+    ranks_.gather(mine_, all_, counts_);
+    if (!out) return;
+    out->assign(static_cast<std::size_t>(stride * count), 0.0);
+    std::size_t placed = 0;
+    for (std::size_t at = 0; at + static_cast<std::size_t>(stride) < all_.size() + 1; at += static_cast<std::size_t>(stride + 1)) {
+      const auto b = static_cast<Eigen::Index>(all_[at]) - first;
+      if (b < 0 || b >= count) break;
+      std::copy_n(all_.data() + at + 1, stride, out->data() + b * stride);
+      ++placed;
+    }
+    if (placed != static_cast<std::size_t>(count) || all_.size() != placed * static_cast<std::size_t>(stride + 1)) {
+      std::fprintf(stderr, "sesi: rank 0: a block of bodies gathered from the ranks is not whole\n");
+      ranks_.abort(3);
+    }
+  }
+
+  const Ranks& ranks_;
+  int n_;
+  mutable std::vector<double> mine_, all_;  // one block's, reused
+  mutable std::vector<int> counts_;
+};
+
 class DomainIntegrator final : public Integrator {
  public:
   DomainIntegrator(const Scene& scene, const Ranks& ranks)
-      : scene_(scene), ranks_(ranks), geometry_(scene.space), n_(scene.body_count()) {
+      : scene_(scene), ranks_(ranks), geometry_(scene.space), n_(scene.body_count()), gather_(ranks, n_) {
     // (Member by member: a copy of the whole scene would copy its bodies once more.)
     shape_.name = scene.name;
     shape_.source = scene.source;
@@ -216,23 +288,65 @@ class DomainIntegrator final : public Integrator {
     Eigen::MatrixXd lx, lv;
     local_->frame_points(lx, lv);
     const bool translations = scene_.space.kind == SpaceKind::euclidean;
-    std::vector<std::vector<double>> terms;  // by component: a row a local body (0 in the halo)
+    // Each own body's term formed as its block of bodies is summed (sum_own), never all at once.
     Eigen::MatrixXd x(lx.rows(), 1), v(lv.rows(), 1);
-    for (const int l : own_) {
+    const auto term = [&](std::size_t k, double* out) {
+      const int l = own_[k];
       x = lx.col(l);
       v = lv.col(l);
       const double m = scene_.bodies[static_cast<std::size_t>(ids_[static_cast<std::size_t>(l)])].mass;
       // (One body's map: 0 + its term, the term itself; a sum from +0 never meets -0.)
-      const Eigen::VectorXd term = sesi::momentum_map_of(x, v, [m](int) { return m; }, translations);
-      if (terms.empty()) terms.assign(static_cast<std::size_t>(term.size()), std::vector<double>(ids_.size(), 0.0));
-      for (Eigen::Index k = 0; k < term.size(); ++k) terms[static_cast<std::size_t>(k)][static_cast<std::size_t>(l)] = term[k];
-    }
-    // (A rank owns at least one body: every rank has the components.)
-    Eigen::VectorXd out(static_cast<Eigen::Index>(terms.size()));
-    for (std::size_t k = 0; k < terms.size(); ++k) out[static_cast<Eigen::Index>(k)] = sum(terms[k]);
+      const Eigen::VectorXd t = sesi::momentum_map_of(x, v, [m](int) { return m; }, translations);
+      std::copy_n(t.data(), t.size(), out);
+    };
+    // (sesi::momentum_map_of's count: every rank knows it, whatever it owns.)
+    const auto a = static_cast<int>(lx.rows());
+    const std::vector<double> sums = sum_own(a * (a - 1) / 2 + (translations ? a : 0), term);
+    Eigen::VectorXd out = Eigen::Map<const Eigen::VectorXd>(sums.data(), static_cast<Eigen::Index>(sums.size()));
     return local_->momentum_in_world(out);
   }
   Eigen::MatrixXd points() override { return gathered(local_->points()); }
+  Eigen::MatrixXd points_of(const std::vector<int>& bodies, bool local) override {
+    std::vector<double> wanted(bodies.begin(), bodies.end());  // rank 0's, to every rank
+    ranks_.from_root(wanted);
+    if (wanted.empty()) return {};
+    const Eigen::MatrixXd all = local ? local_->local_points() : local_->points();
+    std::vector<double> mine, got;
+    std::vector<int> counts;
+    for (std::size_t k = 0; k < wanted.size(); ++k) {
+      const auto at = std::lower_bound(ids_.begin(), ids_.end(), static_cast<int>(wanted[k]));
+      if (at == ids_.end() || *at != static_cast<int>(wanted[k]) || !owned_[static_cast<std::size_t>(at - ids_.begin())]) continue;
+      mine.push_back(static_cast<double>(k));
+      const Eigen::Index l = at - ids_.begin();
+      mine.insert(mine.end(), all.col(l).data(), all.col(l).data() + all.rows());
+    }
+    ranks_.gather(mine, got, counts);
+    if (!ranks_.root()) return {};
+    Eigen::MatrixXd out(all.rows(), static_cast<Eigen::Index>(wanted.size()));
+    for (std::size_t at = 0; at < got.size(); at += static_cast<std::size_t>(all.rows() + 1)) {
+      out.col(static_cast<Eigen::Index>(got[at])) = Eigen::Map<const Eigen::VectorXd>(got.data() + at + 1, all.rows());
+    }
+    return out;
+  }
+  bool own_state(Snapshot& s) override {
+    // The own bodies' columns of what the outputs see (one process's read, points, velocities
+    // and image counts of the same bodies, bit for bit: the same functions of the same state).
+    Eigen::MatrixXd q, p;
+    local_->read(q, p);
+    s.q = q(Eigen::all, own_);
+    s.p = p(Eigen::all, own_);
+    q.resize(0, 0);
+    p.resize(0, 0);
+    s.x = local_->points()(Eigen::all, own_);
+    s.v = local_->velocities()(Eigen::all, own_);
+    const auto counts = local_->image_counts();
+    s.image_counts.resize(0, 0);
+    if (counts.size() != 0) s.image_counts = counts(Eigen::all, own_);
+    s.ids.clear();
+    for (const int l : own_) s.ids.push_back(ids_[static_cast<std::size_t>(l)]);
+    s.gather = &gather_;
+    return true;
+  }
   Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic> image_counts() const override {
     const auto local = local_->image_counts();
     if (local.size() == 0) return {};
@@ -322,19 +436,20 @@ class DomainIntegrator final : public Integrator {
   /// The columns of local (one per local body) of this rank's own bodies, gathered by rank 0 into
   /// one matrix in body order; 0 columns on the other ranks.
   Eigen::MatrixXd gathered(const Eigen::MatrixXd& local) const {
+    // (Each column after its body's index: rank 0 keeps no list of every rank's bodies.)
     std::vector<double> mine, all;
     std::vector<int> counts;
-    mine.reserve(own_.size() * static_cast<std::size_t>(local.rows()));
-    for (const int b : own_) mine.insert(mine.end(), local.col(b).data(), local.col(b).data() + local.rows());
+    const Eigen::Index rows = local.rows();
+    mine.reserve(own_.size() * static_cast<std::size_t>(rows + 1));
+    for (const int b : own_) {
+      mine.push_back(ids_[static_cast<std::size_t>(b)]);
+      mine.insert(mine.end(), local.col(b).data(), local.col(b).data() + rows);
+    }
     ranks_.gather(mine, all, counts);
-    if (!ranks_.root()) return Eigen::MatrixXd(local.rows(), 0);
-    Eigen::MatrixXd out(local.rows(), n_);
-    std::size_t at = 0;
-    for (const std::vector<int>& ids : owned_ids_) {
-      for (const int b : ids) {
-        out.col(b) = Eigen::Map<const Eigen::VectorXd>(all.data() + at, local.rows());
-        at += static_cast<std::size_t>(local.rows());
-      }
+    if (!ranks_.root()) return Eigen::MatrixXd(rows, 0);
+    Eigen::MatrixXd out(rows, n_);
+    for (std::size_t at = 0; at < all.size(); at += static_cast<std::size_t>(rows + 1)) {
+      out.col(static_cast<Eigen::Index>(all[at])) = Eigen::Map<const Eigen::VectorXd>(all.data() + at + 1, rows);
     }
     return out;
   }
@@ -342,21 +457,42 @@ class DomainIntegrator final : public Integrator {
   /// A sum over bodies (System::sum_rows): this rank's own rows to rank 0, summed there over all
   /// bodies in body order (one process's bits), the total on every rank.
   double sum(const std::vector<double>& rows) const {
-    std::vector<double> mine, all;
+    return sum_own(1, [&](std::size_t k, double* out) { *out = rows[static_cast<std::size_t>(own_[k])]; })[0];
+  }
+  /// The same of `width` values a body at once, each summed apart: value(k, out) puts the k-th
+  /// own body's (own_'s order) into out[0 .. width). In blocks of bodies, so that rank 0 holds a
+  /// block's values at a time, not every body's (issue #27's memory at 10^6 bodies): term by
+  /// term in body order, the same sums as sum_in_order over all of them.
+  template <class Value>
+  std::vector<double> sum_own(int width, const Value& value) const {
+    constexpr int block = 1 << 16;
+    const bool root = ranks_.root();
+    const auto w = static_cast<std::size_t>(width);
+    std::vector<double> mine, all, part;
     std::vector<int> counts;
-    mine.reserve(own_.size());
-    for (const int b : own_) mine.push_back(rows[static_cast<std::size_t>(b)]);
-    ranks_.gather(mine, all, counts);
-    double total = 0.0;
-    if (ranks_.root()) {
-      std::vector<double> full(static_cast<std::size_t>(n_), 0.0);
-      std::size_t at = 0;
-      for (const std::vector<int>& ids : owned_ids_) {
-        for (const int b : ids) full[static_cast<std::size_t>(b)] = all[at++];
+    std::size_t own = 0;
+    std::vector<double> totals(w, 0.0);
+    for (int first = 0; first < n_; first += block) {
+      const int end = std::min(n_, first + block);
+      mine.clear();
+      // (Each body's values after its index: rank 0 keeps no list of every rank's bodies.)
+      for (; own < own_.size() && ids_[static_cast<std::size_t>(own_[own])] < end; ++own) {
+        mine.push_back(ids_[static_cast<std::size_t>(own_[own])]);
+        mine.resize(mine.size() + w);
+        value(own, mine.data() + mine.size() - w);
       }
-      total = sesi::parallel::sum_in_order(full);
+      ranks_.gather(mine, all, counts);
+      if (!root) continue;
+      part.assign(static_cast<std::size_t>(end - first) * w, 0.0);
+      for (std::size_t at = 0; at < all.size(); at += w + 1) {
+        std::copy_n(all.data() + at + 1, w, part.data() + (static_cast<std::size_t>(all[at]) - static_cast<std::size_t>(first)) * w);
+      }
+      for (std::size_t b = 0; b < part.size(); b += w) {
+        for (std::size_t c = 0; c < w; ++c) totals[c] += part[b + c];
+      }
     }
-    return ranks_.from_root(total);
+    for (double& total : totals) total = ranks_.from_root(total);
+    return totals;
   }
 
   /// The own bodies' columns of local (rows x this rank's bodies) from every rank into whole
@@ -547,8 +683,8 @@ class DomainIntegrator final : public Integrator {
     send_.assign(static_cast<std::size_t>(K), {});
     received_.assign(static_cast<std::size_t>(K), {});
     owned_ids_.assign(static_cast<std::size_t>(K), {});
-    // (Every rank, for the whole run's points of pair terms without a cutoff: gather_whole.)
-    if (ranks_.root() || long_range_) {
+    // (For the whole run's points of pair terms without a cutoff: gather_whole.)
+    if (long_range_) {
       for (int b = 0; b < n_; ++b) owned_ids_[static_cast<std::size_t>(slabs.owner[static_cast<std::size_t>(b)])].push_back(b);
     }
     start_.resize(X.rows(), static_cast<Eigen::Index>(own_.size()));
@@ -609,6 +745,7 @@ class DomainIntegrator final : public Integrator {
   const Ranks& ranks_;
   Geometry geometry_;
   int n_;
+  RankGather gather_;  // the snapshots of own_state
   Scene shape_;  // the scene without its bodies
   double halo_width_ = 0.0, skin_ = 0.0;
   double recut2_ = 0.0, broken2_ = 0.0;  // squared chords of half the skin and of the skin
@@ -618,7 +755,7 @@ class DomainIntegrator final : public Integrator {
   std::vector<int> ids_, own_, halo_;
   std::vector<char> owned_;
   std::vector<std::vector<int>> send_to_, receive_from_;
-  // Each rank's own bodies, ascending: on rank 0 (gathered), and on every rank with long_range_.
+  // Each rank's own bodies, ascending: on every rank with long_range_.
   std::vector<std::vector<int>> owned_ids_;
   bool long_range_ = false;  // a pair term without a cutoff (gather_whole)
   std::vector<double> whole_mine_, whole_all_;  // gather_whole's buffers

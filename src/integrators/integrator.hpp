@@ -19,6 +19,8 @@
 
 namespace sesi::program {
 
+struct Snapshot;  // run_types.hpp
+
 /// What is stepped, exactly as the integrator holds it. This, not a conversion, is what a
 /// checkpoint saves and a resumed run restores. Two kinds:
 ///  - a chart method's (embedded = false): chart coordinates and momenta q, p of every body in
@@ -95,6 +97,21 @@ class Integrator {
   virtual bool listed_close_pairs(double reach, std::vector<std::pair<int, int>>& out) {
     static_cast<void>(reach);
     static_cast<void>(out);
+    return false;
+  }
+  /// The points (as local_points() where `local`, else points()) of bodies (0-based, ascending),
+  /// a column each. Across ranks a collective call: rank 0's bodies, gathered on rank 0 from
+  /// their owners (the other ranks get none), so no rank holds every body's point.
+  virtual Eigen::MatrixXd points_of(const std::vector<int>& bodies, bool local) {
+    if (bodies.empty()) return {};
+    const Eigen::MatrixXd all = local ? local_points() : points();
+    return all(Eigen::all, bodies);
+  }
+  /// Across ranks: this rank's own bodies' columns of the state the outputs see into s (q and p
+  /// as read() gives them, x, v and a box's image counts), with Snapshot::ids and gather set;
+  /// false, s untouched, for an integrator of the whole run (the caller reads that whole).
+  virtual bool own_state(Snapshot& s) {
+    static_cast<void>(s);
     return false;
   }
   /// The state as stepped, and its restoration (a checkpoint's; the run goes on bit for bit as

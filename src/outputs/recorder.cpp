@@ -198,29 +198,35 @@ void Recorder::track_conserved(double conserved) {
 }
 
 void Recorder::write_row(const Snapshot& s) {
-  if (scene_.space.kind == SpaceKind::hyperbolic) {
-    // The distance from the chart's origin: R acosh(x_time / R), time-like coordinate last.
+  // Across ranks the other ranks serve s's columns until the row is written (for_each_block).
+  const ServedUntil served(s);
+  const bool hyperbolic = scene_.space.kind == SpaceKind::hyperbolic;
+  // The distance from the chart's origin: R acosh(x_time / R), time-like coordinate last.
+  const auto farthest = [&](const BodyBlock::Map& x) {
     const double radius = scene_.space.radius;
-    for (Eigen::Index b = 0; b < s.x.cols(); ++b) {
-      const double far = radius * std::acosh(std::max(1.0, s.x(s.x.rows() - 1, b) / radius));
+    for (Eigen::Index b = 0; b < x.cols(); ++b) {
+      const double far = radius * std::acosh(std::max(1.0, x(x.rows() - 1, b) / radius));
       stats_.max_distance = std::max(stats_.max_distance, far);
     }
-  }
+  };
+  bool measured = false;  // whether a pass over the points took the distances
   if (trajectory_csv_ && !scene_.space.has_topology()) {
     // In blocks of bodies (a row of 10^6 bodies would be 56 MB of doubles held at once).
     CsvWriter& csv = *trajectory_csv_;
     csv.begin_row();
     csv.number(s.t);
-    constexpr Eigen::Index block = 1 << 14;
-    for (Eigen::Index first = 0; first < s.q.cols(); first += block) {
+    for_each_block(s, field_q | field_p | field_x, [&](const BodyBlock& block) {
+      const auto q = block.q(), p = block.p(), x = block.x();
       row_.clear();
-      for (Eigen::Index b = first; b < std::min(first + block, s.q.cols()); ++b) {
-        row_.insert(row_.end(), s.q.col(b).data(), s.q.col(b).data() + s.q.rows());
-        row_.insert(row_.end(), s.p.col(b).data(), s.p.col(b).data() + s.p.rows());
-        row_.insert(row_.end(), s.x.col(b).data(), s.x.col(b).data() + s.x.rows());
+      for (Eigen::Index b = 0; b < block.count; ++b) {
+        row_.insert(row_.end(), q.col(b).data(), q.col(b).data() + q.rows());
+        row_.insert(row_.end(), p.col(b).data(), p.col(b).data() + p.rows());
+        row_.insert(row_.end(), x.col(b).data(), x.col(b).data() + x.rows());
       }
       csv.numbers(row_);
-    }
+      if (hyperbolic) farthest(x);
+    });
+    measured = true;
     csv.end_row();
   } else if (trajectory_csv_) {
     check_topology(s);
@@ -230,22 +236,60 @@ void Recorder::write_row(const Snapshot& s) {
     const auto numbers = [&](const auto& column) {
       for (Eigen::Index i = 0; i < column.size(); ++i) csv.number(column(i));
     };
-    for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
-      numbers(s.q.col(b));
-      numbers(s.p.col(b));
-      numbers(s.x.col(b));
-      if (!scene_.space.box.empty()) {
-        for (Eigen::Index i = 0; i < s.image_counts.rows(); ++i) csv.integer(s.image_counts(i, b));
-      } else {
-        numbers(s.unwrapped.col(b));
-        csv.text(word_text(s.words[static_cast<std::size_t>(b)]));
+    for_each_block(s, field_q | field_p | field_x | field_n, [&](const BodyBlock& block) {
+      const auto q = block.q(), p = block.p(), x = block.x();
+      const auto n = block.image_counts();
+      for (Eigen::Index k = 0; k < block.count; ++k) {
+        const Eigen::Index b = block.first + k;
+        numbers(q.col(k));
+        numbers(p.col(k));
+        numbers(x.col(k));
+        if (!scene_.space.box.empty()) {
+          for (Eigen::Index i = 0; i < n.rows(); ++i) csv.integer(n(i, k));
+        } else {
+          // (A surface: one process only, s whole.)
+          numbers(s.unwrapped.col(b));
+          csv.text(word_text(s.words[static_cast<std::size_t>(b)]));
+        }
       }
-    }
+      if (hyperbolic) farthest(x);
+    });
+    measured = true;
     csv.end_row();
   }
 #ifdef SESI_HAVE_HDF5
-  if (trajectory_h5md_) trajectory_h5md_->write(s);
+  if (trajectory_h5md_ && s.gather) {
+    // Across ranks the frame is put together on rank 0 (H5mdWriter writes each dataset's frame
+    // in one piece, so that the file's chunks are laid out as one process lays them).
+    Snapshot whole;
+    whole.step = s.step;
+    whole.t = s.t;
+    whole.energy = s.energy;
+    whole.thermostat = s.thermostat;
+    whole.temperature = s.temperature;
+    whole.kinetic_temperature = s.kinetic_temperature;
+    whole.heat = s.heat;
+    whole.conserved = s.conserved;
+    whole.configurational = s.configurational;
+    const Eigen::Index bodies = body_count(s);
+    whole.q.resize(s.q.rows(), bodies);
+    whole.p.resize(s.p.rows(), bodies);
+    whole.x.resize(s.x.rows(), bodies);
+    whole.image_counts.resize(s.image_counts.rows(), s.image_counts.rows() > 0 ? bodies : 0);
+    for_each_block(s, field_q | field_p | field_x | field_n, [&](const BodyBlock& block) {
+      whole.q.middleCols(block.first, block.count) = block.q();
+      whole.p.middleCols(block.first, block.count) = block.p();
+      whole.x.middleCols(block.first, block.count) = block.x();
+      if (block.n_rows > 0) whole.image_counts.middleCols(block.first, block.count) = block.image_counts();
+      if (hyperbolic && !measured) farthest(block.x());
+    });
+    measured = true;
+    trajectory_h5md_->write(whole);
+  } else if (trajectory_h5md_) {
+    trajectory_h5md_->write(s);
+  }
 #endif
+  if (hyperbolic && !measured) for_each_block(s, field_x, [&](const BodyBlock& block) { farthest(block.x()); });
   row_.assign({s.t, s.energy, s.energy - stats_.energy_initial});
   row_.insert(row_.end(), s.momentum.data(), s.momentum.data() + s.momentum.size());
   if (scene_.thermostat) {
@@ -268,8 +312,10 @@ void Recorder::write_row(const Snapshot& s) {
 void Recorder::check_topology(const Snapshot& s) const {
   // The run loop fills them in on a topology (run_loop.cpp, observe_topology).
   const auto bodies = static_cast<Eigen::Index>(scene_.body_count());
+  // (Across ranks a rank's snapshot holds its own bodies.)
+  const auto held = s.gather ? static_cast<Eigen::Index>(s.ids.size()) : bodies;
   const bool fits = !scene_.space.box.empty()
-                        ? s.image_counts.rows() == scene_.dim() && s.image_counts.cols() == bodies
+                        ? s.image_counts.rows() == scene_.dim() && s.image_counts.cols() == held
                         : static_cast<Eigen::Index>(s.words.size()) == bodies && s.unwrapped.cols() == bodies &&
                               s.unwrapped.rows() == s.x.rows();
   if (!fits) throw std::logic_error("Recorder::write_row: a snapshot without its topology's images");
@@ -281,7 +327,19 @@ std::vector<double> Recorder::max_exact_error() const {
   return exact_ ? exact_->max_error() : std::vector<double>{};
 }
 
+void Recorder::release_final() {
+  if (final_released_) return;
+  final_released_ = true;
+  const ServedUntil served(final_);
+}
+
 void Recorder::finish(const RunOutcome& outcome, double wall_seconds, int ranks) {
+  // Across ranks the other ranks serve the final state's columns until the summary is written
+  // (or this failed before it).
+  struct Release {
+    Recorder& r;
+    ~Release() { r.release_final(); }
+  } release{*this};
   if (trajectory_csv_) trajectory_csv_->close();
 #ifdef SESI_HAVE_HDF5
   if (trajectory_h5md_) trajectory_h5md_->close();

@@ -60,6 +60,9 @@ class Recorder final : public RunSink {
   /// Closes the trajectory and CSV files and writes summary.json (ranks: the MPI ranks that ran
   /// the steps, 1 for one process).
   void finish(const RunOutcome& outcome, double wall_seconds, int ranks = 1);
+  /// Across ranks, where finish() was not reached: the other ranks stop serving the final state
+  /// (they serve it from the run's end until finish() has written it or this is called).
+  void release_final();
 
   const InvariantStats& invariants() const { return stats_; }
   /// For a checkpoint: the statistics so far, and the outputs' lengths (flushed to the files).
@@ -84,6 +87,7 @@ class Recorder final : public RunSink {
   bool tracking_ = false;
   InvariantStats stats_;
   Snapshot final_;
+  bool final_released_ = false;
 };
 
 }  // namespace sesi::program

@@ -36,22 +36,29 @@ void write_final_state(JsonWriter& json, const Snapshot& s) {
   json.integer("step", s.step);
   json.number("t", s.t);
   json.begin_array("bodies");
-  for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
-    json.begin_object();
-    // (A column of a column-major matrix: contiguous.)
-    const auto column = [b](const Eigen::MatrixXd& m) {
-      return std::span<const double>(m.col(b).data(), static_cast<std::size_t>(m.rows()));
-    };
-    json.numbers("q", column(s.q));
-    json.numbers("p", column(s.p));
-    json.numbers("x", column(s.x));
-    json.numbers("v", column(s.v));
-    // On a topology: the image counts (E^n box), or the unwrapped point and the word (H^2 surface).
-    if (s.image_counts.cols() > b) json.numbers("n", Eigen::VectorXd(s.image_counts.col(b).cast<double>()));
-    if (s.unwrapped.cols() > b) json.numbers("u", Eigen::VectorXd(s.unwrapped.col(b)));
-    if (static_cast<Eigen::Index>(s.words.size()) > b) json.string("word", word_text(s.words[static_cast<std::size_t>(b)]));
-    json.end_object();
-  }
+  // In blocks of bodies: across ranks from their owners (for_each_block), one block at a time.
+  for_each_block(s, field_q | field_p | field_x | field_v | field_n, [&](const BodyBlock& block) {
+    const auto q = block.q(), p = block.p(), x = block.x(), v = block.v();
+    const auto n = block.image_counts();
+    for (Eigen::Index k = 0; k < block.count; ++k) {
+      const Eigen::Index b = block.first + k;
+      json.begin_object();
+      // (A column of a column-major matrix: contiguous.)
+      const auto column = [k](const BodyBlock::Map& m) {
+        return std::span<const double>(m.col(k).data(), static_cast<std::size_t>(m.rows()));
+      };
+      json.numbers("q", column(q));
+      json.numbers("p", column(p));
+      json.numbers("x", column(x));
+      json.numbers("v", column(v));
+      // On a topology: the image counts (E^n box), or the unwrapped point and the word (H^2
+      // surface; one process only, s whole).
+      if (n.rows() > 0) json.numbers("n", Eigen::VectorXd(n.col(k).cast<double>()));
+      if (s.unwrapped.cols() > b) json.numbers("u", Eigen::VectorXd(s.unwrapped.col(b)));
+      if (static_cast<Eigen::Index>(s.words.size()) > b) json.string("word", word_text(s.words[static_cast<std::size_t>(b)]));
+      json.end_object();
+    }
+  });
   json.end_array();
   json.end_object();
 }

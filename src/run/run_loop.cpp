@@ -34,10 +34,19 @@ class EncounterCheck {
   }
   bool active() const { return !terms_.empty(); }
 
-  /// The encounter deepest below its floor among the points x (ambient x bodies; the
-  /// integrator's local points, force centres moved there by its to_local), as the detail of
-  /// the run's failure, or "" when none.
-  std::string check(const Eigen::MatrixXd& x, Integrator& integrator) const {
+  /// The encounter deepest below its floor among the points the integrator's potentials see
+  /// (its local points, force centres moved there by its to_local), as the detail of the run's
+  /// failure, or "" when none. Every body's point only where a term needs them all (a force
+  /// centre, a search without the forces' lists): across ranks rank 0 then gathers them.
+  std::string check(Integrator& integrator) const {
+    const bool local = integrator.clustered();
+    Eigen::MatrixXd whole;
+    bool held = false;
+    const auto all_points = [&]() -> const Eigen::MatrixXd& {
+      if (!held) whole = local ? integrator.local_points() : integrator.points();
+      held = true;
+      return whole;
+    };
     double worst = 1.0;
     std::string detail;
     const auto consider = [&](const Term& t, double d, int i, int j) {
@@ -53,15 +62,23 @@ class EncounterCheck {
                " potential (potential[" + std::to_string(t.index + 1) + "], min_distance)";
     };
     Eigen::VectorXd a, b;
-    const auto pair = [&](const Term& t, int i, int j) {
-      a = x.col(i);
-      b = x.col(j);
-      consider(t, geometry_.distance(a, b), i + 1, j + 1);
+    const auto pairs = [&](const Term& t, const std::vector<std::pair<int, int>>& close, const Eigen::MatrixXd& x,
+                           const std::vector<int>* columns) {
+      // columns: x's bodies (ascending) where x holds only those.
+      const auto column = [&](int body) {
+        return columns ? std::lower_bound(columns->begin(), columns->end(), body) - columns->begin() : Eigen::Index{body};
+      };
+      for (const auto& [i, j] : close) {
+        a = x.col(column(i));
+        b = x.col(column(j));
+        consider(t, geometry_.distance(a, b), i + 1, j + 1);
+      }
     };
     for (const Term& t : terms_) {
       const PotentialSpec& spec = scene_.potentials[t.index];
       if (const auto* central = std::get_if<CentralCotangentSpec>(&spec)) {
         const Eigen::VectorXd centre = integrator.to_local(central->center);
+        const Eigen::MatrixXd& x = all_points();
         for (Eigen::Index i = 0; i < x.cols(); ++i) {
           a = x.col(i);
           consider(t, geometry_.distance(a, centre), static_cast<int>(i) + 1, 0);
@@ -69,12 +86,20 @@ class EncounterCheck {
         continue;
       }
       // The pairs from the lists the forces keep, where they hold them: one neighbour structure
-      // per step (issue #27); else the geometry's own search.
+      // per step (issue #27), and the points of those pairs' bodies alone; else the geometry's
+      // own search.
       std::vector<std::pair<int, int>> close;
-      if (!integrator.listed_close_pairs(t.floor, close)) close = geometry_.close_pairs(x, t.floor);
-      for (const auto& [i, j] : close) pair(t, i, j);
+      if (integrator.listed_close_pairs(t.floor, close)) {
+        std::vector<int> bodies;
+        for (const auto& [i, j] : close) bodies.insert(bodies.end(), {i, j});
+        std::sort(bodies.begin(), bodies.end());
+        bodies.erase(std::unique(bodies.begin(), bodies.end()), bodies.end());
+        pairs(t, close, integrator.points_of(bodies, local), &bodies);
+      } else {
+        pairs(t, geometry_.close_pairs(all_points(), t.floor), all_points(), nullptr);
+      }
       if (scene_.space.kind == SpaceKind::sphere && std::holds_alternative<CotangentGravitySpec>(spec)) {
-        for (const auto& [i, j] : geometry_.close_pairs(x, t.floor, /*antipodal=*/true)) pair(t, i, j);
+        pairs(t, geometry_.close_pairs(all_points(), t.floor, /*antipodal=*/true), all_points(), nullptr);
       }
     }
     return detail;
@@ -108,11 +133,26 @@ double guard_threshold(const Scene& scene) {
 }
 
 /// The energy guard of the scene (sesi::EnergyGuard), on the scale K0 + |V0| of its initial state.
+/// Across ranks (Snapshot::gather) every rank calls it: rank 0 sums over the bodies in body order
+/// (one process's bits) from blocks the other ranks serve, and hands the sum to them.
 sesi::EnergyGuard<double> energy_guard(const Scene& scene, const Geometry& geometry, const Snapshot& s) {
   double kinetic = 0.0;
-  for (Eigen::Index b = 0; b < s.q.cols(); ++b) {
-    kinetic += geometry.kinetic_energy(s.q.col(b), s.p.col(b), scene.bodies[static_cast<std::size_t>(b)].mass);
+  const auto add = [&](const BodyBlock& block) {
+    const auto q = block.q(), p = block.p();
+    for (Eigen::Index k = 0; k < block.count; ++k) {
+      const double m = scene.bodies[static_cast<std::size_t>(block.first + k)].mass;
+      kinetic += geometry.kinetic_energy(q.col(k), p.col(k), m);
+    }
+  };
+  if (!s.gather) {
+    for_each_block(s, field_q | field_p, add);
+  } else if (s.gather->root()) {
+    const ServedUntil served(s);
+    for_each_block(s, field_q | field_p, add);
+  } else {
+    s.gather->serve(s);
   }
+  if (s.gather) kinetic = s.gather->shared(kinetic);
   return sesi::EnergyGuard<double>(guarded_value(scene, s), kinetic + std::abs(s.energy - kinetic),
                                    guard_threshold(scene));
 }
@@ -277,13 +317,15 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   Snapshot s;
   s.step = first;
   s.t = schedule.time(first);
-  integrator.read(s.q, s.p);
   s.energy = initial_energy(scene, integrator);
   observe_thermostat(scene, integrator, s.t, s, true);
   s.momentum = integrator.momentum_map();
-  s.x = integrator.points();
-  observe_topology(scene, integrator, s);
-  s.v = integrator.velocities();
+  if (!integrator.own_state(s)) {  // (across ranks: this rank's own bodies)
+    integrator.read(s.q, s.p);
+    s.x = integrator.points();
+    observe_topology(scene, integrator, s);
+    s.v = integrator.velocities();
+  }
   if (fresh) {
     recorder.track(s.energy, s.momentum);
     if (s.thermostat) recorder.track_conserved(s.conserved);
@@ -351,8 +393,7 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
       return false;
     }
     if (encounters.active()) {
-      const std::string detail = integrator.clustered() ? encounters.check(integrator.local_points(), integrator)
-                                                        : encounters.check(integrator.points(), integrator);
+      const std::string detail = encounters.check(integrator);
       if (!detail.empty()) {
         outcome.reason = StopReason::close_encounter;
         outcome.detail = std::move(detail);
@@ -385,14 +426,17 @@ RunOutcome run_steps(const Scene& scene, Integrator& integrator, RunSink& record
   bool good_written = first_written;
   // The whole state after step k, which passed its checks, into s (rows and the final state).
   // The last good state's copy is dropped first: it is superseded, and so a run holds one
-  // whole-run copy of the state at a time, not two (across ranks, rank 0 holds it: 80 bytes a
-  // body on S^2, 80 MB at 10^6 bodies).
+  // copy of the state at a time, not two. Across ranks each rank holds its own bodies' columns
+  // (Integrator::own_state), and rank 0 gathers them in blocks as it writes them: no rank holds
+  // every body's (80 bytes a body on S^2, 80 MB at 10^6 bodies).
   const auto take_state = [&](long k) {
     for (Eigen::MatrixXd* m : {&good.q, &good.p, &good.x, &good.v, &good.unwrapped}) m->resize(0, 0);
     good.image_counts.resize(0, 0);
     good.words = {};
+    good.ids = {};
     s.step = k;
     s.t = schedule.time(k);
+    if (integrator.own_state(s)) return;
     s.x = integrator.points();
     observe_topology(scene, integrator, s);
     integrator.read(s.q, s.p);

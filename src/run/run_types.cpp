@@ -1,7 +1,10 @@
 #include "run_types.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <stdexcept>
+#include <utility>
 
 namespace sesi::program {
 
@@ -69,6 +72,52 @@ const char* stop_reason_name(StopReason reason) {
     case StopReason::close_encounter: return "close encounter";
   }
   return "unknown";
+}
+
+Eigen::Index body_count(const Snapshot& s) { return s.gather ? s.gather->bodies() : s.q.cols(); }
+
+void for_each_block(const Snapshot& s, unsigned fields, const std::function<void(const BodyBlock&)>& f) {
+  // Views of 2^14 bodies in one process (the trajectory's rows as before); across ranks, rank 0
+  // holds one gathered block at a time: 2^12 bodies, a fraction of a MB, and the row's
+  // formatted text of it (CsvWriter::numbers).
+  const Eigen::Index size = s.gather ? Eigen::Index{1} << 12 : Eigen::Index{1} << 14;
+  const bool n = (fields & field_n) != 0 && s.image_counts.size() + s.image_counts.rows() > 0;
+  const auto rows = [&](unsigned field, Eigen::Index r) { return (fields & field) != 0 ? r : Eigen::Index{0}; };
+  const Eigen::Index rq = rows(field_q, s.q.rows()), rp = rows(field_p, s.p.rows()), rx = rows(field_x, s.x.rows()),
+                     rv = rows(field_v, s.v.rows()), rn = n ? s.image_counts.rows() : 0;
+  const Eigen::Index total = body_count(s);
+  if (!s.gather) {
+    // One process: views of s's columns (a column-major block of columns is contiguous).
+    for (Eigen::Index first = 0; first < total; first += size) {
+      const Eigen::Index count = std::min(size, total - first);
+      f(BodyBlock{first, count, s.q.data() + rq * first, s.p.data() + rp * first, s.x.data() + rx * first,
+                  s.v.data() + rv * first, s.image_counts.data() + rn * first, rq, rp, rx, rv, rn});
+    }
+    return;
+  }
+  // Across ranks (rank 0, the others serving until its ServedUntil goes): each block from its
+  // owners, taken apart into one buffer a field.
+  const Eigen::Index stride = rq + rp + rx + rv + rn;
+  std::vector<double> packed, q, p, x, v;
+  std::vector<std::int64_t> counts;
+  for (Eigen::Index first = 0; first < total; first += size) {
+    const Eigen::Index count = std::min(size, total - first);
+    s.gather->fetch(s, fields & (n ? ~0u : ~unsigned{field_n}), first, count, packed);
+    if (static_cast<Eigen::Index>(packed.size()) != stride * count) {
+      throw std::logic_error("for_each_block: a block of the wrong size from the ranks");
+    }
+    for (auto* m : {&q, &p, &x, &v}) m->clear();
+    counts.clear();
+    for (Eigen::Index k = 0; k < count; ++k) {
+      const double* at = packed.data() + k * stride;
+      for (const auto& [field, r] : {std::pair{&q, rq}, std::pair{&p, rp}, std::pair{&x, rx}, std::pair{&v, rv}}) {
+        field->insert(field->end(), at, at + r);
+        at += r;
+      }
+      for (Eigen::Index i = 0; i < rn; ++i) counts.push_back(static_cast<std::int64_t>(at[i]));  // (exact below 2^53)
+    }
+    f(BodyBlock{first, count, q.data(), p.data(), x.data(), v.data(), counts.data(), rq, rp, rx, rv, rn});
+  }
 }
 
 }  // namespace sesi::program

@@ -20,6 +20,7 @@ namespace sesi::program {
 
 class ProgressBar;
 struct Checkpoint;
+class BodyGather;
 
 /// The state of all bodies at one time, in chart and embedding coordinates.
 struct Snapshot {
@@ -45,7 +46,74 @@ struct Snapshot {
   Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic> image_counts;
   std::vector<std::vector<std::int16_t>> words;
   Eigen::MatrixXd unwrapped;
+  /// Across MPI ranks (Integrator::own_state), else null: q, p, x, v and image_counts hold this
+  /// rank's own bodies only, ids their indices in the run (ascending), and rank 0's outputs take
+  /// the columns from their owners in blocks of bodies through `gather` (for_each_block), so that
+  /// no rank holds every body's columns at once.
+  const BodyGather* gather = nullptr;
+  std::vector<int> ids;
 };
+
+/// Columns first .. first + count - 1 of a Snapshot's body matrices (rows as the snapshot's, 0
+/// rows for a field not asked for or not held), in the run's body order.
+struct BodyBlock {
+  Eigen::Index first = 0, count = 0;
+  using Map = Eigen::Map<const Eigen::MatrixXd>;
+  using CountMap = Eigen::Map<const Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic>>;
+  const double *q_data = nullptr, *p_data = nullptr, *x_data = nullptr, *v_data = nullptr;
+  const std::int64_t* n_data = nullptr;
+  Eigen::Index q_rows = 0, p_rows = 0, x_rows = 0, v_rows = 0, n_rows = 0;
+  Map q() const { return Map(q_data, q_rows, count); }
+  Map p() const { return Map(p_data, p_rows, count); }
+  Map x() const { return Map(x_data, x_rows, count); }
+  Map v() const { return Map(v_data, v_rows, count); }
+  CountMap image_counts() const { return CountMap(n_data, n_rows, count); }
+};
+
+/// The fields a pass over a snapshot's blocks asks for (a bit each).
+enum BodyField : unsigned { field_q = 1, field_p = 2, field_x = 4, field_v = 8, field_n = 16 };
+
+/// The columns of a Snapshot spread over MPI ranks (Snapshot::gather; src/domain). Rank 0 asks,
+/// the other ranks answer from their own bodies in serve() meanwhile: every rank calls one of
+/// them for the same snapshot, as for any collective call.
+class BodyGather {
+ public:
+  virtual ~BodyGather() = default;
+  /// Rank 0: the fields of s of bodies [first, first + count) from their owners, into out (per
+  /// body in body order: each field asked for, in BodyField's order, its rows).
+  virtual void fetch(const Snapshot& s, unsigned fields, Eigen::Index first, Eigen::Index count,
+                     std::vector<double>& out) const = 0;
+  /// Rank 0: no more fetches of s; the other ranks' serve() returns.
+  virtual void done() const = 0;
+  /// The other ranks: answer rank 0's fetches of s until its done().
+  virtual void serve(const Snapshot& s) const = 0;
+  /// The run's body count.
+  virtual Eigen::Index bodies() const = 0;
+  /// Whether this is rank 0, which writes the outputs; rank 0's value on every rank.
+  virtual bool root() const = 0;
+  virtual double shared(double value) const = 0;
+};
+
+/// Rank 0 of a run across ranks: the other ranks serve s (BodyGather::serve) until this goes,
+/// after the passes over s of a row or a summary, or an exception in them. Nothing in one process.
+class ServedUntil {
+ public:
+  explicit ServedUntil(const Snapshot& s) : s_(s) {}
+  ~ServedUntil() {
+    if (s_.gather) s_.gather->done();
+  }
+  ServedUntil(const ServedUntil&) = delete;
+  ServedUntil& operator=(const ServedUntil&) = delete;
+
+ private:
+  const Snapshot& s_;
+};
+
+/// f on consecutive blocks of bodies of s in body order, each with the fields asked for: views of
+/// s's own matrices in one process; across ranks (rank 0; the others serve) gathered blocks.
+void for_each_block(const Snapshot& s, unsigned fields, const std::function<void(const BodyBlock&)>& f);
+/// The run's body count of s (across ranks every rank's, not this rank's own).
+Eigen::Index body_count(const Snapshot& s);
 
 /// A surface word as the outputs write it (trajectory.csv's b<k>_word, trajectory.h5's
 /// particles/all/word): "e" for the identity, else the 1-based side numbers joined by '.'

@@ -395,6 +395,48 @@ def ranks_thermostats(ctx):
     stopped_on_two_resumed_on_three(ctx, ctx.work / "langevin.toml", "Langevin")
 
 
+def published(ctx, name):
+    """The directory a run with --out work/name published (a stopped run's may be marked
+    incomplete beside it)."""
+    found = [p for p in ctx.work.iterdir() if p.is_dir() and (p.name == name or p.name.startswith(name + "."))]
+    check(len(found) == 1, f"--out {name}: expected one published directory, found {sorted(p.name for p in found)}")
+    return found[0]
+
+
+@case
+def ranks_output_ends(ctx):
+    """What rank 0 gathers in blocks of bodies from their owners (Snapshot::gather): trajectory.h5
+    (H5MD, where sesi has HDF5) on 2 and 3 ranks, and a run stopped by the energy guard after a
+    checked step between rows, whose outputs end at that last state known good (a row of it and
+    summary.json's final state): the plain run's files on 2 and 3 ranks, exit status included."""
+    scene = sphere_scene(ctx, 2000, 300)
+    h5md = ["--trajectory-format", "h5md", "--output-every", "25", "--threads", "1", "--quiet"]
+    probe = ctx.run("run", scene, "--out", ctx.work / "h5md-probe", *h5md, "--t-end", "0.002")
+    if probe.returncode == 0:
+        expect_ok(ctx.run("run", scene, "--out", ctx.work / "h5md-plain", *h5md), "plain sesi run (H5MD)")
+        for ranks in (2, 3):
+            what = f"mpiexec -np {ranks} sesi run (H5MD)"
+            expect_ok(ctx.run("run", scene, "--out", ctx.work / f"h5md-np{ranks}", *h5md, ranks=ranks), what)
+            expect_same_outputs(ctx.work / f"h5md-np{ranks}", ctx.work / "h5md-plain", what)
+    else:
+        check("HDF5" in probe.stderr or "h5md" in probe.stderr, f"H5MD probe: {probe.stderr.strip()}")
+    # A guard so tight that it stops the run after some checks (every 7 steps) have passed: at
+    # step 35, the last good step 28.
+    text = scene.read_text().replace("neighbour_skin = 0.12\n", "neighbour_skin = 0.12\nenergy_guard = 2e-6\n", 1)
+    scene = ctx.write("guarded.toml", text)
+    settings = ["--output-every", "25", "--check-every", "7", "--threads", "1", "--quiet"]
+    plain = ctx.run("run", scene, "--out", ctx.work / "guarded-plain", *settings)
+    check(plain.returncode == 3, f"plain sesi run with a tight energy guard: exit status {plain.returncode}, not 3")
+    reference = published(ctx, "guarded-plain")
+    last = json.loads((reference / "summary.json").read_text())["final_state"]["step"]
+    check(last % 25 != 0 and last > 7, f"the guarded run's last good step {last} is not a checked step between rows")
+    for ranks in (2, 3):
+        what = f"mpiexec -np {ranks} sesi run with a tight energy guard"
+        result = ctx.run("run", scene, "--out", ctx.work / f"guarded-np{ranks}", *settings, ranks=ranks)
+        check(result.returncode == 3, f"{what}: exit status {result.returncode}, not 3; stderr: {result.stderr.strip()}")
+        expect_same_outputs(published(ctx, f"guarded-np{ranks}"), reference, what)
+
+
 def gravity_sphere_scene(ctx, bodies, steps, name="gravity.toml"):
     """tools/lj_sphere_scene.py's S^2 bodies under cotangent gravity (G = 1/N, a pair term without a
     cutoff) instead of Lennard-Jones."""
