@@ -50,6 +50,7 @@
 ///    moves its world point, and the list rebuilds.
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -962,43 +963,51 @@ class VerletList {
         !(skin > Scalar(0))) {
       return false;
     }
+    // Each chunk's own verdict, then whether any chunk saw a body move (no pass over a vector of
+    // marks: this runs at every step).
     const int n = static_cast<int>(X.cols());
-    std::vector<char>& moved = moved_;  // kept: an update allocates nothing
-    moved.assign(static_cast<std::size_t>(n), 0);
+    std::atomic<bool> any_moved{false};
     if constexpr (detail::PeriodicCells<Chart>) {
       // The displacement to the nearest image of the point at the build: a body brought back
       // into the box has moved by its true displacement only (below L/2 while it is below the
       // half skin, as the cutoff is at most L/2).
       parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
         typename Chart::Topology::Vector y(X.rows());
+        bool moved = false;
         for (int i = begin; i < end; ++i) {
           y = built_at_.col(i);
           chart.topology().nearest_image(X.col(i), y);
           const Scalar c2 = (X.col(i) - y).squaredNorm();
-          moved[static_cast<std::size_t>(i)] = !(c2 <= half_skin_chord2_);  // NaN: rebuild
+          moved = moved || !(c2 <= half_skin_chord2_);  // NaN: rebuild
         }
+        if (moved) any_moved.store(true, std::memory_order_relaxed);
       });
-      return std::find(moved.begin(), moved.end(), char(1)) == moved.end();
+      return !any_moved.load();
     }
-    parallel::for_each(n, [&](int i) {
-      Scalar c2(0);
-      const int a = static_cast<int>(X.rows());
-      for (int k = 0; k < a; ++k) {
-        const Scalar u = X(k, i) - built_at_(k, i);
-        c2 += u * u;
+    const int a = static_cast<int>(X.rows());
+    const bool minkowski = chart.curvature() < Scalar(0);  // the last entry counts negatively
+    const Scalar limit = half_skin_chord2_;
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      bool moved = false;
+      for (int i = begin; i < end; ++i) {
+        Scalar c2(0);
+        for (int k = 0; k < a; ++k) {
+          const Scalar u = X(k, i) - built_at_(k, i);
+          c2 += u * u;
+        }
+        if (minkowski) {
+          const Scalar u = X(a - 1, i) - built_at_(a - 1, i);
+          c2 -= Scalar(2) * u * u;
+        }
+        moved |= !(c2 <= limit);  // NaN: rebuild
       }
-      if (chart.curvature() < Scalar(0)) {
-        const Scalar u = X(a - 1, i) - built_at_(a - 1, i);
-        c2 -= Scalar(2) * u * u;
-      }
-      moved[static_cast<std::size_t>(i)] = !(c2 <= half_skin_chord2_);  // NaN: rebuild
+      if (moved) any_moved.store(true, std::memory_order_relaxed);
     });
-    return std::find(moved.begin(), moved.end(), char(1)) == moved.end();
+    return !any_moved.load();
   }
 
   NeighbourIndex<Chart> index_;
   NeighbourLists lists_;
-  mutable std::vector<char> moved_;  // valid's scratch
   Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> built_at_;
   Scalar range_ = 0, skin_ = 0, half_skin_chord2_ = 0;
   long builds_ = 0;

@@ -320,4 +320,129 @@ SESI_INLINE Scalar atan2_sqrt_fast(Scalar y2, Scalar x2) {
   }
 }
 
+namespace detail {
+
+/// sin and cos of x in double, |x| <= sincos_limit, branch-free (selects only), so that a loop
+/// of it vectorises: the argument reduction of fdlibm's e_rem_pio2.c (Sun Microsystems, 1993;
+/// its "medium" case: pi/2 in 33-bit pieces pio2_1, pio2_2, pio2_3 and the tails pio2_2t,
+/// pio2_3t, each product with fn exact for |fn| < 2^20), to y0 + y1, then the kernels of
+/// FreeBSD's k_sin.c and k_cos.c (S. Kargl and B. Evans, 2008: minimax on [-pi/4, pi/4],
+/// |poly error| < 2^-58), and the quadrant fn mod 4 as an exact double (the vector loop has no
+/// integer lanes to spare). fdlibm takes the second and third reduction steps only on
+/// cancellation; here the second is always taken and the third selected where fdlibm takes it
+/// (the third step drops the second's tail, so it must not replace it elsewhere). lanes: the
+/// quadrant by std::floor (a vector instruction from SSE4.1 on), else by integers (floor is a
+/// libm call on SSE2); the same value either way.
+template <bool lanes>
+SESI_INLINE void sincos_reduced(double x, double& s, double& c) {
+  constexpr double invpio2 = 0x1.45f306dc9c883p-1;   // 2/pi
+  constexpr double pio2_1 = 0x1.921fb54400000p+0;    // first 33 bits of pi/2
+  constexpr double pio2_2 = 0x1.0b4611a600000p-34;   // second 33 bits
+  constexpr double pio2_2t = 0x1.3198a2e037073p-69;  // pi/2 - (pio2_1 + pio2_2)
+  constexpr double pio2_3 = 0x1.3198a2e000000p-69;   // third 33 bits
+  constexpr double pio2_3t = 0x1.b839a252049c1p-104; // pi/2 - (pio2_1 + pio2_2 + pio2_3)
+  constexpr double S1 = -0x1.5555555555549p-3, S2 = 0x1.111111110f8a6p-7, S3 = -0x1.a01a019c161d5p-13,
+                   S4 = 0x1.71de357b1fe7dp-19, S5 = -0x1.ae5e68a2b9cebp-26, S6 = 0x1.5d93a5acfd57cp-33;
+  constexpr double C1 = 0x1.555555555554cp-5, C2 = -0x1.6c16c16c15177p-10, C3 = 0x1.a01a019cb1590p-16,
+                   C4 = -0x1.27e4f809c52adp-22, C5 = 0x1.1ee9ebdb4b1c4p-29, C6 = -0x1.8fae9be8838d4p-37;
+  constexpr double shifter = 0x1.8p52;  // x / (pi/2) rounded to the nearest integer (ties even)
+  const double fn = (x * invpio2 + shifter) - shifter;
+  const double t = x - fn * pio2_1;  // exact
+  const double w2 = fn * pio2_2;     // exact
+  const double r2 = t - w2;
+  const double e2 = fn * pio2_2t - ((t - r2) - w2);
+  const double w3 = fn * pio2_3;
+  const double r3 = r2 - w3;
+  const double e3 = fn * pio2_3t - ((r2 - r3) - w3);
+  const bool deep = std::fabs(r2 - e2) < std::fabs(x) * 0x1p-49;  // fdlibm: 49 bits cancelled
+  const double r = deep ? r3 : r2, w = deep ? e3 : e2;
+  const double y0 = r - w;
+  const double y1 = (r - y0) - w;
+  const double z = y0 * y0, zz = z * z;
+  const double rs = S2 + z * (S3 + z * S4) + z * zz * (S5 + z * S6);
+  const double v = z * y0;
+  const double sn = y0 - ((z * (0.5 * y1 - v * rs) - y1) - v * S1);
+  const double rc = z * (C1 + z * (C2 + z * C3)) + zz * zz * (C4 + z * (C5 + z * C6));
+  const double hz = 0.5 * z;
+  const double wc = 1.0 - hz;
+  const double cs = wc + (((1.0 - wc) - hz) + (z * rc - y0 * y1));
+  // Quadrant fn mod 4 = m: sin x = sin y, cos y, -sin y, -cos y for m = 0..3; cos x likewise
+  // shifted by one. Exact in doubles (fn is an integer below 2^20).
+  double m, odd, mc;
+  if constexpr (lanes) {
+    m = fn - 4.0 * std::floor(fn * 0.25);
+    odd = m - 2.0 * std::floor(m * 0.5);
+    mc = (m + 1.0) - 4.0 * std::floor((m + 1.0) * 0.25);
+  } else {
+    const auto n = static_cast<std::int64_t>(fn);
+    m = static_cast<double>(n & 3);
+    odd = static_cast<double>(n & 1);
+    mc = static_cast<double>((n + 1) & 3);
+  }
+  const double s0 = odd != 0.0 ? cs : sn;
+  const double c0 = odd != 0.0 ? sn : cs;
+  s = m >= 2.0 ? -s0 : s0;
+  c = mc >= 2.0 ? -c0 : c0;
+}
+
+}  // namespace detail
+
+/// Arguments up to this magnitude take sincos_fast's own path; beyond it, and for NaN or an
+/// infinity, the C library's sincos (fdlibm's medium reduction holds below 2^20 pi/2).
+inline constexpr double sincos_limit = 0x1p19;
+
+/// s = sin x, c = cos x, the same bits as every lane of sincos_many (the charts' trig caches:
+/// hyperspherical.hpp). Error against long double sinl, cosl (tests/core/special.cpp: 3e6
+/// arguments from 1e-8 to 5e5 in magnitude, and the doubles next to k pi/2 for |k| <= 2^19):
+/// measured at most 0.78 ulp; glibc's sincos is within 1 ulp and correctly rounded in most cases,
+/// so the two differ in the last bit for some arguments. Other Scalars: the C library.
+template <class Scalar>
+SESI_INLINE void sincos_fast(Scalar x, Scalar& s, Scalar& c) {
+  using std::cos;
+  using std::sin;
+  if constexpr (std::is_same_v<Scalar, double>) {
+    if (std::fabs(x) <= sincos_limit) {
+      detail::sincos_reduced<false>(x, s, c);
+      return;
+    }
+  }
+  s = sin(x);
+  c = cos(x);
+}
+
+namespace detail {
+/// sincos_many's loop for one vector width: every lane reduced (an argument beyond the limit
+/// as 0), then those arguments again through sincos_fast (the C library).
+SESI_INLINE void sincos_lanes(const double* x, double* s, double* c, int n) {
+  SESI_PRAGMA_SIMD
+  for (int k = 0; k < n; ++k) sincos_reduced<true>(std::fabs(x[k]) <= sincos_limit ? x[k] : 0.0, s[k], c[k]);
+  for (int k = 0; k < n; ++k) {
+    if (!(std::fabs(x[k]) <= sincos_limit)) sincos_fast(x[k], s[k], c[k]);
+  }
+}
+#if SESI_SIMD_DISPATCH
+SESI_TARGET_AVX512 inline void sincos_lanes_avx512(const double* x, double* s, double* c, int n) {
+  sincos_lanes(x, s, c, n);
+}
+SESI_TARGET_AVX2 inline void sincos_lanes_avx2(const double* x, double* s, double* c, int n) {
+  sincos_lanes(x, s, c, n);
+}
+#endif
+}  // namespace detail
+
+/// sincos_fast of x[0..n) into s, c: in vector lanes (AVX2, AVX-512 as simd::level() picks;
+/// the base width is a scalar loop, its vector floor being a libm call on SSE2), the same bits
+/// at every width and as sincos_fast one by one (no FMA at any width).
+template <class Scalar>
+void sincos_many(const Scalar* x, Scalar* s, Scalar* c, int n) {
+  if constexpr (std::is_same_v<Scalar, double>) {
+#if SESI_SIMD_DISPATCH
+    const simd::Level level = simd::level();
+    if (level == simd::Level::avx512) return detail::sincos_lanes_avx512(x, s, c, n);
+    if (level == simd::Level::avx2) return detail::sincos_lanes_avx2(x, s, c, n);
+#endif
+  }
+  for (int k = 0; k < n; ++k) sincos_fast(x[k], s[k], c[k]);
+}
+
 }  // namespace sesi::special

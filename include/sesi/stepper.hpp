@@ -87,6 +87,42 @@ void cached_level_flow(const Chart& chart, Workspace<Chart>& ws, int b, int i, t
   }
 }
 
+/// Charts whose K-flows the kick-drift-kick engine runs in blocks of bodies (flows_in_blocks):
+/// a trig cache, its entries for many bodies at once (level_trig), and a fixed dimension (the
+/// blocks' points live on the stack: no allocation in a step).
+template <class Chart>
+concept blocked_flows =
+    HasTrigCache<Chart> && Chart::dimension != Eigen::Dynamic &&
+    requires(const Chart& c, int i, const typename Chart::Scalar* q, typename Chart::Scalar* s) {
+      c.level_trig(i, q, s, s, i);
+    };
+
+/// The kick-drift-kick step's K-flows in order, as (level, time) pairs: K_1(h/2)..K_{n-1}(h/2)
+/// K_n(h) K_{n-1}(h/2)..K_1(h/2), a zero time of level 0 left out (levels 0-based here).
+template <class Scalar, int N>
+struct KdkFlows {
+  std::array<int, 2 * N + 1> level{};
+  std::array<Scalar, 2 * N + 1> time{};
+  int count = 0;
+  KdkFlows(int top, Scalar h) {
+    const Scalar half = h / Scalar(2);
+    if (top == 0) {
+      if (h != Scalar(0)) add(0, h);
+      return;
+    }
+    if (half != Scalar(0)) add(0, half);
+    for (int i = 1; i < top; ++i) add(i, half);
+    add(top, h);
+    for (int i = top - 1; i >= 1; --i) add(i, half);
+    if (half != Scalar(0)) add(0, half);
+  }
+  void add(int i, Scalar t) {
+    level[static_cast<std::size_t>(count)] = i;
+    time[static_cast<std::size_t>(count)] = t;
+    ++count;
+  }
+};
+
 /// Whether a and b have the same shape and numbers (a NaN differs from itself), compared column
 /// by column on threads.
 template <class M>
@@ -272,15 +308,15 @@ class Composition {
   void do_step(Sys&& system, state_type& x, time_type /*t*/, time_type dt) {
     using Raw = std::remove_cvref_t<Sys>;
     const auto& sys = detail::unwrap<Raw>::get(system);
-    // The trig caches left by the last step are valid if q is what that step produced.
-    bool q_unchanged = detail::same_columns(last_q_, x.q);
     // A few bodies re-charted since (Recharting, a topology's reduction): their trig and the
     // gradient rows that depend on them are brought up to date, the rest kept. A turn keeps q
     // and changes the body's frame (recharting.hpp), so the frames are asked too: with q alone,
     // one turned body among 10^5 (most steps of a Lennard-Jones run on S^2) cost a whole force
     // evaluation, 1.9 per step instead of 1.
     const bool kept = patch(sys, x);  // whether the kept gradient is x's (kick-drift-kick)
-    if (!q_unchanged) q_unchanged = kept;
+    // The trig caches left by the last step are valid if q is what that step produced (asked
+    // only where the patch did not already bring them up to date).
+    const bool q_unchanged = kept || detail::same_columns(last_q_, x.q);
     if (!q_unchanged) sys.refresh(x, ws_);  // sizes the workspace; one sine and cosine per coordinate
     if constexpr (Form == Splitting::drift_kick_drift) {
       step_dkd(sys, x, dt);
@@ -329,6 +365,49 @@ class Composition {
       f(b, sys.mass(b), sc);
       x.q.col(b) = sc.q;
       x.p.col(b) = sc.p;
+    });
+  }
+  /// The kick-drift-kick form's K-flows `flows` (no per-body stage hook) where the chart gives
+  /// its trig entries for many bodies at once (detail::blocked_flows): bodies in blocks of
+  /// flow_block, each flow's arithmetic body by body (level_flow with own_trig = false), then
+  /// the block's new sines and cosines in one call, in vector lanes (Chart::level_trig: glibc's
+  /// scalar sincos was 12 % of a 10^5-body step on S^2, issue #27). Every body goes through the
+  /// same operations as in the per-body loop, so the bits depend on no block, chunk or thread.
+  template <class Sys, class Flows>
+  void flows_in_blocks(const Sys& sys, state_type& x, const Flows& flows) {
+    const profile::Scope drift(profile::Phase::drift);
+    constexpr int flow_block = 16;
+    const Chart& chart = sys.chart();
+    const int n = sys.bodies();
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      std::array<typename Chart::Point, flow_block> q, p;
+      std::array<Scalar, flow_block> m, qi, sn, cs;
+      for (int b0 = begin; b0 < end; b0 += flow_block) {
+        const int count = std::min(flow_block, end - b0);
+        for (int j = 0; j < count; ++j) {
+          q[j] = x.q.col(b0 + j);
+          p[j] = x.p.col(b0 + j);
+          m[j] = sys.mass(b0 + j);
+        }
+        for (int f = 0; f < flows.count; ++f) {
+          const int i = flows.level[f];
+          for (int j = 0; j < count; ++j) {
+            chart.level_flow(i, q[j], p[j], m[j], flows.time[f], ws_.trig[static_cast<std::size_t>(b0 + j)],
+                             /*own_trig=*/false);
+            qi[j] = q[j][i];
+          }
+          chart.level_trig(i, qi.data(), sn.data(), cs.data(), count);
+          for (int j = 0; j < count; ++j) {
+            auto& t = ws_.trig[static_cast<std::size_t>(b0 + j)];
+            t.s[i] = sn[j];
+            t.c[i] = cs[j];
+          }
+        }
+        for (int j = 0; j < count; ++j) {
+          x.q.col(b0 + j) = q[j];
+          x.p.col(b0 + j) = p[j];
+        }
+      }
     });
   }
   /// After a drift, before the kick: the system's hook (System::drifted: a domain of a simulation
@@ -412,6 +491,14 @@ class Composition {
       // K_1(h/2)..K_{n-1}(h/2) K_n(h) K_{n-1}(h/2)..K_1(h/2); with the per-body hook O,
       // K_1(h/2)..K_n(h/2) O K_n(h/2)..K_1(h/2). Level 0 skips a zero time (as ever).
       const Scalar half = h / Scalar(2);
+      if constexpr (detail::blocked_flows<Chart>) {
+        if (!inner) {
+          flows_in_blocks(sys, x, detail::KdkFlows<Scalar, Chart::dimension>(top, h));
+          drifted(sys, x);
+          pending = h / Scalar(2) + (k + 1 < s ? w_[k + 1] * dt / Scalar(2) : Scalar(0));
+          continue;
+        }
+      }
       each_body(sys, x, [&](int b, Scalar m, auto& sc) {
         const Chart& chart = sys.chart();
         if (top == 0 && !inner) {

@@ -1304,7 +1304,10 @@ class System {
     const Scalar f = derivative_over_sn_on(chart, term, g, mi, mj);
     return c2 >= reach2 ? Scalar(0) : f;
   }
-  /// add_gradient_by_pairs' second pass on row i: the row's sum into w.G.col(i).
+  /// add_gradient_by_pairs' second pass on row i: the row's sum into w.G.col(i). A pair beyond
+  /// the cutoff (dw = 0, its points finite) adds a zero: no branch to mispredict at the cutoff's
+  /// edge, and the same bits (acc starts at +0 and a sum never turns it into -0, so adding +-0
+  /// changes nothing).
   SESI_FLATTEN void sum_of_row(Workspace& w, const NeighbourLists& lists, int i) const {
     const AmbientVectorOf x = w.X.col(i);
     AmbientVectorOf acc = AmbientVectorOf::Zero();
@@ -1312,7 +1315,6 @@ class System {
       const int j = lists.index[static_cast<std::size_t>(e)];
       const std::size_t k = static_cast<std::size_t>(w.pair_of[static_cast<std::size_t>(e)]);
       const Scalar dw = w.pair_dw[k];
-      if (dw == Scalar(0)) continue;  // beyond a cutoff
       const AmbientVectorOf y = w.X.col(j);
       AmbientVectorOf u = x - y;
       u -= w.pair_omc[k] * x;

@@ -112,6 +112,17 @@ class Hyperbolic {
     q[i] += rate;
     if (own_trig) detail::sin_cos(q[i], t.s[i], t.c[i]);
   }
+  /// Trig entry i of `count` bodies from their q_i (qi), as level_flow's own_trig: sinh and
+  /// cosh of the radius, else the angles' sines and cosines in vector lanes (the same bits).
+  void level_trig(int i, const Scalar* qi, Scalar* s, Scalar* c, int count) const {
+    using std::cosh;
+    using std::sinh;
+    if (i > 0) return special::sincos_many(qi, s, c, count);
+    for (int k = 0; k < count; ++k) {
+      s[k] = sinh(qi[k]);
+      c[k] = cosh(qi[k]);
+    }
+  }
   void embed(const TrigType& t, Ambient& x) const {
     x.resize(ambient_dim());
     x[dim_] = radius_ * t.c[0];

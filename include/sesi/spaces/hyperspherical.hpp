@@ -11,11 +11,13 @@
 
 #include <cmath>
 #include <math.h>
+#include <numbers>
 #include <type_traits>
 #include <Eigen/Core>
 #include <Eigen/QR>
 
 #include "sesi/chart.hpp"
+#include "sesi/special_functions.hpp"
 
 namespace sesi {
 
@@ -38,22 +40,24 @@ struct Trig {
 
 namespace detail {
 
-/// s = sin x, c = cos x in one call where the C library has sincos (glibc: one argument
-/// reduction for both, and the same values as sin and cos, checked bit for bit on 2e7 random
-/// arguments in [-10, 10]). GCC does not fuse separate sin and cos calls under -fmath-errno,
-/// and the profile of a SESI step showed half its time in them (issue #4, docs/benchmarks.md).
+/// s = sin x, c = cos x: special::sincos_fast in double (the same bits as its vector lanes,
+/// special::sincos_many, which the kick-drift-kick engine's K-flows use for blocks of bodies:
+/// glibc's sincos was 12 % of a 10^5-body step, issue #27), else the C library's sincos where
+/// there is one (one argument reduction for both; GCC does not fuse separate sin and cos calls
+/// under -fmath-errno).
 template <class Scalar>
 inline void sin_cos(Scalar x, Scalar& s, Scalar& c) {
-#if defined(__GLIBC__) && defined(_GNU_SOURCE)
   if constexpr (std::is_same_v<Scalar, double>) {
-    ::sincos(x, &s, &c);
-  } else if constexpr (std::is_same_v<Scalar, float>) {
+    special::sincos_fast(x, s, c);
+  }
+#if defined(__GLIBC__) && defined(_GNU_SOURCE)
+  else if constexpr (std::is_same_v<Scalar, float>) {
     ::sincosf(x, &s, &c);
   } else if constexpr (std::is_same_v<Scalar, long double>) {
     ::sincosl(x, &s, &c);
-  } else
+  }
 #endif
-  {
+  else {
     using std::cos;
     using std::sin;
     s = sin(x);
@@ -198,6 +202,20 @@ struct DangerFlags {
 template <class Q, class Scalar>
 void polar_angle_danger(const Q& q, const Q& p, int a, int b, Scalar min_sine, DangerFlags& f) {
   using std::abs;
+  if (b - a < 3) {
+    // With fewer than three angles only the angles' own zones count, and most bodies are far
+    // from every pole: |sin q| >= (2/pi) dist(q, pi Z), so an angle in (-1, pi + 1) that is
+    // 1.6 min_sine or more from 0 and from pi is in no zone, and needs no sine (one a body
+    // and step was 4 % of a 10^5-body step on S^2). Others (a NaN too) take the test below.
+    constexpr Scalar pi = std::numbers::pi_v<Scalar>;
+    const Scalar near = Scalar(1.6) * min_sine;
+    bool maybe = false;
+    for (int k = a; k < b; ++k) {
+      const Scalar x = q[k];
+      maybe = maybe || !(x > Scalar(-1) && x < pi + Scalar(1)) || abs(x) < near || abs(pi - x) < near;
+    }
+    if (!maybe) return;
+  }
   Scalar product(1), rate(0), level(1);  // P, its rate's sign, 1 / prod_{a<=j<k} sin^2 q_j
   for (int k = a; k < b; ++k) {
     Scalar s, c;

@@ -88,6 +88,11 @@ class Sphere {
     q[i] += rate;
     if (own_trig) detail::sin_cos(q[i], t.s[i], t.c[i]);
   }
+  /// Trig entry i of `count` bodies from their q_i (qi): what level_flow's own_trig computes,
+  /// for a block of bodies at once (special::sincos_many: vector lanes, the same bits).
+  void level_trig(int /*i*/, const Scalar* qi, Scalar* s, Scalar* c, int count) const {
+    special::sincos_many(qi, s, c, count);
+  }
   void embed(const TrigType& t, Ambient& x) const {
     x.resize(ambient_dim());
     detail::unit_sphere_embed(t, 0, dim_, radius_, x);
