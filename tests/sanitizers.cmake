@@ -4,7 +4,8 @@
 # they would take most of CI's time without covering more code. So are the reference
 # integrators' tests (tests/reference), the many-body and stability tests (template-heavy to
 # compile, numerical checks of code the core tests also run) and the examples, which all run in
-# the main build: the job covers the library's core tests and the program, whose input is
+# the main build: the job covers the library's core tests (but the orders, symplecticity and
+# reversibility of the methods: tests/core/CMakeLists.txt) and the program, whose input is
 # untrusted. With stability and many-body tests in, a fresh-clone `make test` took over an hour
 # on two cores (CI's budget is 45 minutes). SESI_SANITIZER_BUILD compiles the sources whose tests
 # run in a few seconds at -O0 (src/CMakeLists.txt, tests/core/CMakeLists.txt): on the development

@@ -565,11 +565,22 @@ class NeighbourIndex {
 
   /// order_: the bodies sorted by (key, index). Where the keys' bounding box has fewer than
   /// 2^62 cells, by a stable radix sort of the cells' row-major numbers in it (the same order
-  /// as the keys', lexicographic); else by comparisons.
+  /// as the keys', lexicographic); else, and for fewer bodies than radix_min_bodies, by
+  /// comparisons.
   void sort_by_key(int n) {
     order_.resize(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) order_[static_cast<std::size_t>(i)] = i;
     if (n == 0) return;
+    const auto by_key = [&](int i, int j) {
+      const int c = compare(key_ptr(i), key_ptr(j));
+      return c != 0 ? c < 0 : i < j;
+    };
+    // A radix pass clears and scans 2^11 buckets a chunk, whatever n: for a few bodies that
+    // was most of a step (2 bodies on H^2: 52 % of `sesi run` in sort_by_key).
+    if (n < radix_min_bodies) {
+      std::sort(order_.begin(), order_.end(), by_key);
+      return;
+    }
     // The keys' bounding box: each chunk's on threads, then joined (min and max: any order).
     const int chunks = parallel::chunks_for(n);
     const std::size_t K = static_cast<std::size_t>(keys_);
@@ -603,10 +614,7 @@ class NeighbourIndex {
       count = side >= most || count > most / side ? most : count * side;
     }
     if (count >= most) {
-      std::sort(order_.begin(), order_.end(), [&](int i, int j) {
-        const int c = compare(key_ptr(i), key_ptr(j));
-        return c != 0 ? c < 0 : i < j;
-      });
+      std::sort(order_.begin(), order_.end(), by_key);
       return;
     }
     cell_number_.resize(static_cast<std::size_t>(n));
@@ -883,6 +891,9 @@ class NeighbourIndex {
   const std::int64_t* cell_ptr(int c) const {
     return &cell_key_[static_cast<std::size_t>(c) * static_cast<std::size_t>(keys_)];
   }
+  /// Below this many bodies sort_by_key compares keys: n log n comparisons cost less than the
+  /// radix sort's passes over its buckets.
+  static constexpr int radix_min_bodies = 512;
   int compare(const std::int64_t* a, const std::int64_t* b) const { return compare_prefix(a, b, keys_); }
   static int compare_prefix(const std::int64_t* a, const std::int64_t* b, int n) {
     for (int d = 0; d < n; ++d) {

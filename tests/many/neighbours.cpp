@@ -305,31 +305,35 @@ TEST_CASE("the skin changes when the lists are rebuilt, not the forces") {
 // cell by cell in a sorted copy of the points): the same lists on one thread and on two, a
 // visit order that is a permutation of the bodies, and exact lists still when a NaN body's far
 // cell (key -2^60) makes the keys' bounding box too large to number (the sort by comparisons).
+// Below NeighbourIndex's radix_min_bodies the bodies are sorted by comparisons: exact lists too.
 TEST_CASE("the neighbour index is the same on any thread count, with a NaN body, in cell order") {
-  const int n = 1200;  // above 2 min_parallel_bodies: two threads take part
-  using Chart = sesi::Sphere<2, double>;
-  const Chart chart(radius_for(2, n));
-  const auto s = random_state(chart, n, 0, 0, 1, 16);
-  Eigen::MatrixXd X = points_of(chart, s);
-  for (const bool nan : {false, true}) {
-    INFO("NaN body: " << nan);
-    if (nan) X(0, 17) = std::numeric_limits<double>::quiet_NaN();
-    check_index(chart, X, 2.5, 1e-12);
-    sesi::NeighbourLists lists[2];
-    for (const int threads : {1, 2}) {
-      sesi::parallel::set_threads(threads);
-      sesi::NeighbourIndex<Chart> index;
-      index.build(chart, X, 2.8, lists[threads - 1]);
+  // 1200: above 2 min_parallel_bodies, so two threads take part; 300: the sort by comparisons.
+  for (const int n : {1200, 300}) {
+    INFO("bodies: " << n);
+    using Chart = sesi::Sphere<2, double>;
+    const Chart chart(radius_for(2, n));
+    const auto s = random_state(chart, n, 0, 0, 1, 16);
+    Eigen::MatrixXd X = points_of(chart, s);
+    for (const bool nan : {false, true}) {
+      INFO("NaN body: " << nan);
+      if (nan) X(0, 17) = std::numeric_limits<double>::quiet_NaN();
+      check_index(chart, X, 2.5, 1e-12);
+      sesi::NeighbourLists lists[2];
+      for (const int threads : {1, 2}) {
+        sesi::parallel::set_threads(threads);
+        sesi::NeighbourIndex<Chart> index;
+        index.build(chart, X, 2.8, lists[threads - 1]);
+      }
+      sesi::parallel::set_threads(0);
+      CHECK(lists[0].offset == lists[1].offset);
+      CHECK(lists[0].index == lists[1].index);
+      CHECK(lists[0].visit_order == lists[1].visit_order);
+      std::vector<int> order = lists[0].visit_order;
+      std::sort(order.begin(), order.end());
+      bool permutation = static_cast<int>(order.size()) == n;
+      for (int i = 0; permutation && i < n; ++i) permutation = order[static_cast<std::size_t>(i)] == i;
+      CHECK(permutation);
+      if (nan) CHECK(lists[0].end(17) == lists[0].begin(17));  // a NaN body has no partner
     }
-    sesi::parallel::set_threads(0);
-    CHECK(lists[0].offset == lists[1].offset);
-    CHECK(lists[0].index == lists[1].index);
-    CHECK(lists[0].visit_order == lists[1].visit_order);
-    std::vector<int> order = lists[0].visit_order;
-    std::sort(order.begin(), order.end());
-    bool permutation = static_cast<int>(order.size()) == n;
-    for (int i = 0; permutation && i < n; ++i) permutation = order[static_cast<std::size_t>(i)] == i;
-    CHECK(permutation);
-    if (nan) CHECK(lists[0].end(17) == lists[0].begin(17));  // a NaN body has no partner
   }
 }

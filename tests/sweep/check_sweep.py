@@ -52,7 +52,9 @@ class Context:
             env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                        OMPI_MCA_rmaps_base_oversubscribe="1",
                        # containers often forbid the cross-memory attach of Open MPI's shared-memory transport
-                       OMPI_MCA_btl_vader_single_copy_mechanism="none")
+                       OMPI_MCA_btl_vader_single_copy_mechanism="none",
+                       # a waiting rank yields its core instead of polling (tests/ranks/check_ranks.py)
+                       OMPI_MCA_mpi_yield_when_idle="1")
             command = [self.mpiexec, "--oversubscribe", "-np", str(ranks), *command]
         return subprocess.run(command, cwd=cwd or self.work, capture_output=True, text=True,
                               timeout=timeout, stdin=subprocess.DEVNULL, env=env)
