@@ -125,23 +125,17 @@ class Harness {
       case Method::rattle:
         return embedding<sesi::reference::RattleComposition<co::Strang, Chart>>(param, times, obs);
       case Method::geodesic2:
-        return embedding<sesi::reference::GeodesicComposition<co::Strang, Chart>>(param, times,
-                                                                                  obs);
+        return geodesic<co::Strang>(param, times, obs);
       case Method::geodesic4:
-        return embedding<sesi::reference::GeodesicComposition<co::Yoshida4, Chart>>(param, times,
-                                                                                    obs);
+        return geodesic<co::Yoshida4>(param, times, obs);
       case Method::geodesic6:
-        return embedding<sesi::reference::GeodesicComposition<co::Yoshida6, Chart>>(param, times,
-                                                                                    obs);
+        return geodesic<co::Yoshida6>(param, times, obs);
       case Method::geodesic6_kahan_li:
-        return embedding<sesi::reference::GeodesicComposition<co::KahanLi6, Chart>>(param, times,
-                                                                                    obs);
+        return geodesic<co::KahanLi6>(param, times, obs);
       case Method::geodesic8:
-        return embedding<sesi::reference::GeodesicComposition<co::McLachlan8, Chart>>(param, times,
-                                                                                     obs);
+        return geodesic<co::McLachlan8>(param, times, obs);
       case Method::geodesic8_kahan_li:
-        return embedding<sesi::reference::GeodesicComposition<co::KahanLi8, Chart>>(param, times,
-                                                                                   obs);
+        return geodesic<co::KahanLi8>(param, times, obs);
       case Method::geodesic6_processed:
         return embedding_processed<co::Blanes6Processed>(param, times, obs);
       case Method::geodesic8_processed:
@@ -468,6 +462,15 @@ class Harness {
     return {sesi::embedding_points(sys_, r.state), long(r.steps), long(r.evaluations)};
   }
 
+  // The compositions, processed and geodesic methods run on the engines of runtime tables (the
+  // program's): one engine per form for every table, stepping bit for bit as the fixed table's
+  // (tests/program/integrators/test_runtime_composition.cpp, tests/core/processed.cpp), so that a
+  // scene compiles a few engines instead of a few per table.
+  using Dkd = sesi::Composition<co::Runtime, Chart>;
+  using Kdk = sesi::Composition<co::Runtime, Chart, sesi::Splitting::kick_drift_kick>;
+  using ProcessedDkd = sesi::Processed<co::Runtime, Chart>;
+  using ProcessedKdk = sesi::Processed<co::Runtime, Chart, sesi::Splitting::kick_drift_kick>;
+
   template <class Table, class Obs>
   Outcome composition(double dt, std::span<const double> times, Obs& obs) const {
     StateT x = x0_;
@@ -477,13 +480,14 @@ class Harness {
     long steps = 0;
     switch (form_) {
       case SesiForm::seed:
-        steps = run(sesi::Composition<Table, Chart>());
+        steps = run(Dkd::template of<Table>());
         break;
       case SesiForm::program:
-        steps = run(sesi::Composition<Table, Chart, sesi::Splitting::kick_drift_kick>());
+        steps = run(Kdk::template of<Table>());
         break;
       case SesiForm::program_recharting:
-        steps = run(sesi::RechartingComposition<Table, Chart>(sesi::RechartPolicy<double>{}));
+        steps = run(sesi::RechartingComposition<co::Runtime, Chart>(sesi::RechartPolicy<double>{},
+                                                                    Kdk::template of<Table>()));
         break;
     }
     return {sesi::embedding_points(sys_, x), steps, steps * long(Table::stages)};
@@ -495,13 +499,13 @@ class Harness {
   template <class Table, class Obs>
   Outcome processed(double dt, std::span<const double> times, Obs& obs) const {
     switch (form_) {
-      case SesiForm::seed: return processed_run(sesi::Processed<Table, Chart>(), dt, times, obs);
+      case SesiForm::seed: return processed_run<Table>(ProcessedDkd::template of<Table>(), dt, times, obs);
       case SesiForm::program:
-        return processed_run(sesi::Processed<Table, Chart, sesi::Splitting::kick_drift_kick>(), dt,
-                             times, obs);
+        return processed_run<Table>(ProcessedKdk::template of<Table>(), dt, times, obs);
       case SesiForm::program_recharting:
-        return processed_run(sesi::RechartingProcessed<Table, Chart>(sesi::RechartPolicy<double>{}),
-                             dt, times, obs);
+        return processed_run<Table>(sesi::RechartingProcessed<co::Runtime, Chart>(
+                                        sesi::RechartPolicy<double>{}, ProcessedKdk::template of<Table>()),
+                                    dt, times, obs);
     }
     throw std::logic_error("unknown form");
   }
@@ -510,23 +514,22 @@ class Harness {
   template <class Table, class Obs>
   Outcome embedding_processed(double dt, std::span<const double> times, Obs& obs) const {
     if constexpr (quadric) {
-      return processed_run(sesi::reference::GeodesicProcessed<Table, Chart>(),
-                           sesi::reference::to_embedded(sys_, x0_), dt, times, obs);
+      return processed_run<Table>(sesi::reference::GeodesicProcessed<co::Runtime, Chart>::template of<Table>(),
+                                  sesi::reference::to_embedded(sys_, x0_), dt, times, obs);
     } else {
       throw std::logic_error("embedding methods need S^n or H^n");
     }
   }
 
-  template <class Stepper, class Obs>
+  template <class Table, class Stepper, class Obs>
   Outcome processed_run(Stepper st, double dt, std::span<const double> times, Obs& obs) const {
-    return processed_run(std::move(st), x0_, dt, times, obs);
+    return processed_run<Table>(std::move(st), x0_, dt, times, obs);
   }
 
-  /// The processed run from x0 (a chart or an embedded state): enter, step, read through
-  /// post_process, leave.
-  template <class Stepper, class State0, class Obs>
+  /// The processed run of Table's method from x0 (a chart or an embedded state): enter, step,
+  /// read through post_process, leave.
+  template <class Table, class Stepper, class State0, class Obs>
   Outcome processed_run(Stepper st, const State0& x0, double dt, std::span<const double> times, Obs& obs) const {
-    using Table = typename Stepper::table;
     using S = typename Stepper::state_type;
     S x = x0, y = x0;
     long reads = 0;
@@ -557,11 +560,30 @@ class Harness {
     return {sesi::embedding_points(sys_, x), steps, long(evals())};
   }
 
+  /// A geodesic method: the geodesic splitting with Table's weights (on the runtime table's engine).
+  template <class Table, class Obs>
+  Outcome geodesic(double dt, std::span<const double> times, Obs& obs) const {
+    if constexpr (quadric) {
+      return embedding(sesi::reference::GeodesicComposition<co::Runtime, Chart>::template of<Table>(), dt,
+                       times, obs);
+    } else {
+      throw std::logic_error("embedding methods need S^n or H^n");
+    }
+  }
+
   template <class Stepper, class Obs>
   Outcome embedding(double dt, std::span<const double> times, Obs& obs) const {
     if constexpr (quadric) {
+      return embedding(Stepper(), dt, times, obs);
+    } else {
+      throw std::logic_error("embedding methods need S^n or H^n");
+    }
+  }
+
+  template <class Stepper, class Obs>
+  Outcome embedding(Stepper st, double dt, std::span<const double> times, Obs& obs) const {
+    if constexpr (quadric) {
       auto e = sesi::reference::to_embedded(sys_, x0_);
-      Stepper st;
       const long steps = long(sesi::reference::integrate_fixed(st, sys_, e, 0.0, s_.t_end, dt, times, obs));
       return {Eigen::MatrixXd(e.x), steps, long(st.evaluations())};
     } else {

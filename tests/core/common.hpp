@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 
 #include <sesi/chart.hpp>
+#include <sesi/coefficients.hpp>
 #include <sesi/config.hpp>
 #include <sesi/potentials.hpp>
 #include <sesi/spaces/euclidean.hpp>
@@ -249,6 +250,19 @@ sesi::State<typename Sys::Chart> initial_state(const Sys& sys, std::uint32_t see
 }
 
 // ---- runs and measurements -----------------------------------------------------------------
+
+/// The runtime-table engine with the weights of Table, as a default-constructible stepper:
+/// sesi::Composition<coefficients::Runtime, ...>::of<Table>() steps bit for bit as
+/// Composition<Table, ...> (stepper.hpp; tests/program/integrators/test_runtime_composition.cpp
+/// checks it for every table). One engine serves every table, so a test of every method compiles
+/// it once per chart and form instead of once per table.
+template <class Table, class Chart, sesi::Splitting Form = sesi::Splitting::drift_kick_drift>
+struct RuntimeComposition : sesi::Composition<sesi::coefficients::Runtime, Chart, Form> {
+  using Base = sesi::Composition<sesi::coefficients::Runtime, Chart, Form>;
+  using table = Table;
+  RuntimeComposition() : Base(Base::template of<Table>()) {}
+};
+
 
 /// x after `steps` steps of t_end/steps with a fresh Stepper.
 template <class Stepper, class Sys>
