@@ -263,7 +263,6 @@ struct RuntimeComposition : sesi::Composition<sesi::coefficients::Runtime, Chart
   RuntimeComposition() : Base(Base::template of<Table>()) {}
 };
 
-
 /// x after `steps` steps of t_end/steps with a fresh Stepper.
 template <class Stepper, class Sys>
 sesi::State<typename Sys::Chart> run(const Sys& sys, sesi::State<typename Sys::Chart> x,
