@@ -8,7 +8,8 @@
 # whose reference steppers took 650 s of clang's CPU): all run in the main build. The job covers
 # the program, whose input is untrusted, and the core tests of the library's memory-holding code
 # (tests/core/CMakeLists.txt). Tests marked QUICK compile at -O0 in every build
-# (tests/CMakeLists.txt), and SESI_SANITIZER_BUILD compiles the integrators of dimensions 5-8 and
+# (tests/CMakeLists.txt), and SESI_SANITIZER_BUILD instantiates fixed-size charts for dimensions 2
+# and 3 only (src/integrators/dispatch.hpp) and compiles the Eigen::Dynamic integrators and those
 # of the geodesic methods at -O0 (src/CMakeLists.txt). With stability and many-body tests in, a
 # fresh-clone `make test` took over an hour on two cores (CI's budget is 45 minutes).
 set(dir ${WORK_DIR})

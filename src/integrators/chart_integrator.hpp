@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -615,9 +616,10 @@ class ChartIntegrator final : public Integrator {
   mutable bool shown_valid_ = false;
 };
 
-/// The integrator on Space<N> for the N in Dims equal to scene.dim(), or nullptr.
+/// The integrator on Space<N> for the N in Dims (dispatch.hpp's FixedDims) equal to scene.dim(),
+/// or nullptr.
 template <template <int, class> class Space, int... Dims>
-std::unique_ptr<Integrator> integrator_for(const Scene& scene) {
+std::unique_ptr<Integrator> integrator_for(const Scene& scene, std::integer_sequence<int, Dims...>) {
   std::unique_ptr<Integrator> out;
   const auto try_dim = [&]<int N>() {
     if (scene.dim() != N) return false;

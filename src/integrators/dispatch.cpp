@@ -9,7 +9,7 @@
 namespace sesi::program {
 
 std::unique_ptr<Integrator> make_integrator(const Scene& scene) {
-  const bool low = scene.dim() <= 4;
+  const bool fixed = fixed_size_dim(scene.dim());
   if (scene.space.has_topology()) {
     // Every front end's scene (a file, --method, Python, a sweep, a checkpoint) comes through here.
     check_topology_method(scene, Origin{scene.source, scene.integrator.line}, "integrator.method");
@@ -33,13 +33,13 @@ std::unique_ptr<Integrator> make_integrator(const Scene& scene) {
   }
   switch (scene.space.kind) {
     case SpaceKind::sphere:
-      return low ? sphere_integrator_1_4(scene) : sphere_integrator_5_up(scene);
+      return fixed ? sphere_integrator_fixed(scene) : sphere_integrator_dynamic(scene);
     case SpaceKind::hyperbolic:
-      return low ? hyperbolic_integrator_1_4(scene) : hyperbolic_integrator_5_up(scene);
+      return fixed ? hyperbolic_integrator_fixed(scene) : hyperbolic_integrator_dynamic(scene);
     case SpaceKind::euclidean:
       break;
   }
-  return low ? euclidean_integrator_1_4(scene) : euclidean_integrator_5_up(scene);
+  return fixed ? euclidean_integrator_fixed(scene) : euclidean_integrator_dynamic(scene);
 }
 
 std::unique_ptr<Integrator> make_integrator(const Scene& scene, const Integrator& from) {

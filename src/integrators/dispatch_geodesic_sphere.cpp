@@ -1,14 +1,12 @@
-// The geodesic methods' integrators on Sphere charts: dimensions 1 to 4 with fixed-size types,
-// above with Eigen::Dynamic (dispatch.hpp, embedded_integrator.hpp). Fixed sizes stop at 4 here,
-// not at max_fixed_dim as for the chart methods: the geodesic steps are plain vector operations
-// on the ambient points, and each fixed dimension costs compile time.
+// The geodesic methods' integrators on Sphere charts: the fixed-size dimensions (dispatch.hpp),
+// the others with Eigen::Dynamic (embedded_integrator.hpp).
 #include "dispatch.hpp"
 #include "embedded_integrator.hpp"
 
 namespace sesi::program {
 
 std::unique_ptr<Integrator> sphere_geodesic_integrator(const Scene& scene) {
-  if (auto fixed = embedded_integrator_for<sesi::Sphere, 1, 2, 3, 4>(scene)) return fixed;
+  if (auto fixed = embedded_integrator_for<sesi::Sphere>(scene, FixedDims{})) return fixed;
   return std::make_unique<EmbeddedIntegrator<sesi::Sphere<Eigen::Dynamic, double>>>(scene);
 }
 

@@ -18,7 +18,9 @@ using SurfaceChart = sesi::Quotient<sesi::Hyperbolic<2, double>, sesi::Hyperboli
 std::unique_ptr<Integrator> topology_integrator(const Scene& scene) {
   if (scene.space.genus != 0) return std::make_unique<ChartIntegrator<SurfaceChart>>(scene);
   switch (scene.dim()) {
+#ifndef SESI_FEW_FIXED_DIMS  // dispatch.hpp
     case 1: return std::make_unique<ChartIntegrator<BoxChart<1>>>(scene);
+#endif
     case 2: return std::make_unique<ChartIntegrator<BoxChart<2>>>(scene);
     case 3: return std::make_unique<ChartIntegrator<BoxChart<3>>>(scene);
     default: break;

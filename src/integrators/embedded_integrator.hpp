@@ -22,6 +22,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include <sesi/reference/embedding.hpp>
 
@@ -273,9 +274,10 @@ class EmbeddedIntegrator final : public Integrator {
   typename SystemOf<Chart>::Workspace w_ = sys_.make_workspace();  // the diagnostics' own
 };
 
-/// The geodesic integrator on Space<N> for the N in Dims equal to scene.dim(), or nullptr.
+/// The geodesic integrator on Space<N> for the N in Dims (dispatch.hpp's FixedDims) equal to
+/// scene.dim(), or nullptr.
 template <template <int, class> class Space, int... Dims>
-std::unique_ptr<Integrator> embedded_integrator_for(const Scene& scene) {
+std::unique_ptr<Integrator> embedded_integrator_for(const Scene& scene, std::integer_sequence<int, Dims...>) {
   std::unique_ptr<Integrator> out;
   const auto try_dim = [&]<int N>() {
     if (scene.dim() != N) return false;

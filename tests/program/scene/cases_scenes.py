@@ -82,7 +82,7 @@ def embedded_scene(kind, dim, bodies, potentials, t_end):
 
 def dimensions(ctx, kind, bodies2, potentials, lift):
     """The same motion on a totally geodesic 2-dimensional subspace of spaces of dimension 2..10
-    (fixed-size charts up to 8, Eigen::Dynamic above): the embedding points must agree with the
+    (fixed-size charts up to 4, Eigen::Dynamic above): the embedding points must agree with the
     2-dimensional run to round-off (amplified over t = 1). Dimension 1 must run."""
     ambient2 = len(bodies2[0][0])
     runs = {}

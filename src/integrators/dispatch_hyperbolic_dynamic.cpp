@@ -1,0 +1,11 @@
+// Hyperbolic charts of every other dimension, with Eigen::Dynamic types (dispatch.hpp).
+#include "chart_integrator.hpp"
+#include "dispatch.hpp"
+
+namespace sesi::program {
+
+std::unique_ptr<Integrator> hyperbolic_integrator_dynamic(const Scene& scene) {
+  return std::make_unique<ChartIntegrator<sesi::Hyperbolic<Eigen::Dynamic, double>>>(scene);
+}
+
+}  // namespace sesi::program

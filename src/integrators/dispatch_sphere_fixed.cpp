@@ -1,0 +1,11 @@
+// Sphere charts of the fixed-size dimensions (dispatch.hpp).
+#include "chart_integrator.hpp"
+#include "dispatch.hpp"
+
+namespace sesi::program {
+
+std::unique_ptr<Integrator> sphere_integrator_fixed(const Scene& scene) {
+  return integrator_for<sesi::Sphere>(scene, FixedDims{});
+}
+
+}  // namespace sesi::program
