@@ -204,7 +204,8 @@ class NeighbourIndex {
     const int chunks = parallel::chunks_for(total);
     if (scratch_.size() < static_cast<std::size_t>(chunks)) scratch_.resize(static_cast<std::size_t>(chunks));
     slot_start_.resize(static_cast<std::size_t>(total));
-    out.offset.assign(static_cast<std::size_t>(rows) + 1, 0);
+    out.offset.resize(static_cast<std::size_t>(rows) + 1);  // each row's count is written below
+    out.offset[0] = 0;
     const bool minkowski = chart.curvature() < Scalar(0);
     parallel::for_chunks(total, chunks, [&](int begin, int end, int c) {
       Scratch& w = scratch_[static_cast<std::size_t>(c)];
@@ -254,16 +255,17 @@ class NeighbourIndex {
         out.offset[static_cast<std::size_t>(i) + 1] = static_cast<int>(w.buf.size() - first);
       }
     });
-    for (int i = 0; i < rows; ++i) out.offset[static_cast<std::size_t>(i) + 1] += out.offset[static_cast<std::size_t>(i)];
+    // Counts to offsets, and the rows' bodies in cell order, on threads (passes over every body:
+    // serial, they were Amdahl's share of a rebuild in `sesi run --profile`).
+    parallel::prefix_sums(out.offset.data() + 1, rows, scan_);
     const std::size_t pairs = static_cast<std::size_t>(out.offset.back());
     if (out.index.capacity() < pairs) out.index.reserve(pairs + pairs / 4);  // slack: later builds do not allocate
     out.index.resize(pairs);
     if (out.visit_order.capacity() < static_cast<std::size_t>(rows)) out.visit_order.reserve(static_cast<std::size_t>(rows));
-    out.visit_order.clear();
-    for (int s = 0; s < total; ++s) {
-      const int i = order_[static_cast<std::size_t>(s)];
-      if (i < rows) out.visit_order.push_back(i);
-    }
+    parallel::select_in_order(
+        total, scan_, [&](int s) { return order_[static_cast<std::size_t>(s)] < rows; },
+        [&](int kept) { out.visit_order.resize(static_cast<std::size_t>(kept)); },
+        [&](int k, int s) { out.visit_order[static_cast<std::size_t>(k)] = order_[static_cast<std::size_t>(s)]; });
     parallel::for_chunks(total, chunks, [&](int begin, int end, int c) {
       const std::vector<int>& buf = scratch_[static_cast<std::size_t>(c)].buf;
       for (int s = begin; s < end; ++s) {
@@ -517,7 +519,7 @@ class NeighbourIndex {
             count >= Scalar(1) ? static_cast<std::int64_t>(std::min(count, Scalar(std::int64_t(1) << 30))) : 1;
         cell_side_[static_cast<std::size_t>(d)] = L / static_cast<Scalar>(cells_[static_cast<std::size_t>(d)]);
       }
-      key_.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_), 0);
+      key_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_));  // all written below
       parallel::for_each(n, [&](int i) {
         std::int64_t* k = &key_[static_cast<std::size_t>(i) * static_cast<std::size_t>(keys_)];
         for (int d = 0; d < a; ++d) {
@@ -528,7 +530,7 @@ class NeighbourIndex {
       });
     } else if (chart.curvature() < Scalar(0)) {
       keys_ = a - 1;  // the band, then the n - 1 horizontal coordinates
-      key_.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_), 0);
+      key_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_));  // all written below
       set_half_space(chart, X, reach);
       parallel::for_each(n, [&](int i) {
         const Scalar u = half_space(X, i);
@@ -539,7 +541,7 @@ class NeighbourIndex {
       });
     } else {
       keys_ = a;  // the ambient coordinates
-      key_.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_), 0);
+      key_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_));  // all written below
       side_ = chord > Scalar(0) ? chord : Scalar(1);
       parallel::for_each(n, [&](int i) {
         std::int64_t* k = &key_[static_cast<std::size_t>(i) * static_cast<std::size_t>(keys_)];
@@ -547,20 +549,22 @@ class NeighbourIndex {
       });
     }
     sort_by_key(n);
-    // The runs of equal keys (capacities kept: no allocation after the first build).
-    cell_key_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(keys_));
-    cell_start_.resize(static_cast<std::size_t>(n) + 1);
-    std::size_t cells = 0;
-    for (int s = 0; s < n; ++s) {
-      const std::int64_t* k = key_ptr(order_[static_cast<std::size_t>(s)]);
-      if (s == 0 || compare(k, key_ptr(order_[static_cast<std::size_t>(s) - 1])) != 0) {
-        std::copy(k, k + keys_, cell_key_.begin() + static_cast<std::ptrdiff_t>(cells * static_cast<std::size_t>(keys_)));
-        cell_start_[cells++] = s;
-      }
-    }
-    cell_key_.resize(cells * static_cast<std::size_t>(keys_));
-    cell_start_.resize(cells + 1);
-    cell_start_[cells] = n;
+    // The runs of equal keys, on threads (capacities kept: no allocation after the first build).
+    const auto starts_run = [&](int s) {
+      return s == 0 || compare(key_ptr(order_[static_cast<std::size_t>(s)]), key_ptr(order_[static_cast<std::size_t>(s) - 1])) != 0;
+    };
+    const int cells = parallel::select_in_order(
+        n, scan_, starts_run,
+        [&](int runs) {
+          cell_key_.resize(static_cast<std::size_t>(runs) * static_cast<std::size_t>(keys_));
+          cell_start_.resize(static_cast<std::size_t>(runs) + 1);
+        },
+        [&](int c, int s) {
+          const std::int64_t* k = key_ptr(order_[static_cast<std::size_t>(s)]);
+          std::copy(k, k + keys_, cell_key_.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(c) * static_cast<std::size_t>(keys_)));
+          cell_start_[static_cast<std::size_t>(c)] = s;
+        });
+    cell_start_[static_cast<std::size_t>(cells)] = n;
   }
 
   /// order_: the bodies sorted by (key, index). Where the keys' bounding box has fewer than
@@ -569,7 +573,7 @@ class NeighbourIndex {
   /// comparisons.
   void sort_by_key(int n) {
     order_.resize(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) order_[static_cast<std::size_t>(i)] = i;
+    parallel::for_each(n, [&](int i) { order_[static_cast<std::size_t>(i)] = i; });
     if (n == 0) return;
     const auto by_key = [&](int i, int j) {
       const int c = compare(key_ptr(i), key_ptr(j));
@@ -915,6 +919,7 @@ class NeighbourIndex {
   std::vector<Scalar> packed_;          // S^n, E^n, H^n: the points in the order of order_, coordinate by
                                         // coordinate (each followed by pad slots of padding)
   std::vector<int> slot_start_;         // per slot of order_: where its row starts in its chunk's buffer
+  std::vector<int> scan_;               // parallel::prefix_sums' and select_in_order's per chunk
   Scalar side_ = 1;                     // S^n, E^n: the cells' side
   std::vector<std::int64_t> cells_;     // periodic box: cells per axis
   std::vector<Scalar> cell_side_;       // periodic box: their side per axis
@@ -951,7 +956,12 @@ class VerletList {
     if (!valid(chart, X, range, skin)) {
       profile::Scope scope(profile::Phase::neighbours);
       index_.build(chart, X, range + skin, lists_);
-      built_at_ = X;
+      // The points of the build, copied on threads (a copy of every point: no serial pass).
+      built_at_.resize(X.rows(), X.cols());
+      const int n = static_cast<int>(X.cols());
+      parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+        built_at_.middleCols(begin, end - begin) = X.middleCols(begin, end - begin);
+      });
       range_ = range;
       skin_ = skin;
       half_skin_chord2_ = chart.chord_of_distance(skin / Scalar(2));

@@ -159,8 +159,12 @@ class KeptGradient {
   /// frames are x's already, as when the step reused the kept gradient: a copy the less).
   template <class Sys>
   void keep(const Sys& sys, const state_type& x, bool frames_kept = false) {
-    // changed_bodies' marks sized here, at the first step, so that no later step allocates.
+    // changed_bodies' marks and scratch sized here, at the first step, so that no later step allocates.
     if (marks_.size() != static_cast<std::size_t>(x.q.cols())) marks_.resize(static_cast<std::size_t>(x.q.cols()));
+    const int n = static_cast<int>(x.q.cols());
+    if (n > 0 && scan_.size() < static_cast<std::size_t>(parallel::chunks_for(n))) {
+      scan_.resize(static_cast<std::size_t>(parallel::chunks_for(n)));
+    }
     system_ = &sys;
     if constexpr (requires { sys.instance(); }) instance_ = sys.instance();
     if (!frames_kept) copy_frames(x.frames);
@@ -189,10 +193,11 @@ class KeptGradient {
         marks_[k] = last_q.col(b) != x.q.col(b) || (!frames_.empty() && frames_[k] != x.frames[k]);
       }
     });
-    out.clear();
-    for (int b = 0; b < n; ++b) {
-      if (marks_[static_cast<std::size_t>(b)]) out.push_back(b);
-    }
+    // Collected on threads too (a serial pass over every mark was Amdahl's share of a step).
+    parallel::select_in_order(
+        n, scan_, [&](int b) { return marks_[static_cast<std::size_t>(b)] != 0; },
+        [&](int count) { out.resize(static_cast<std::size_t>(count)); },
+        [&](int k, int b) { out[static_cast<std::size_t>(k)] = b; });
     return true;
   }
   /// After a patch: the changed bodies' frames are the kept gradient's now.
@@ -224,6 +229,7 @@ class KeptGradient {
 
   typename state_type::Matrix grad_;
   std::vector<char> marks_;  // changed_bodies' marks
+  std::vector<int> scan_;    // changed_bodies' per chunk (parallel::select_in_order)
   const void* system_ = nullptr;
   std::uint64_t instance_ = 0;  // sesi::System's stamp: its address is no identity
   std::vector<typename state_type::Frame> frames_;
@@ -333,7 +339,7 @@ class Composition {
   /// the system's parameters in place; do_step notices a new q, new frames or another system
   /// (another sesi::System object, even at the address of the last one).
   void reset() {
-    last_q_.resize(0, 0);
+    last_q_.resize(Eigen::NoChange, 0);  // (a fixed-size row count: resize(0, 0) fails Eigen's assertion)
     kept_.forget();
   }
 

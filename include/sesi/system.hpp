@@ -123,6 +123,7 @@ struct Workspace : TrigStore<Chart> {
   /// each row's first pair), each list entry's pair (pair_of), and per pair dW/dd / sn and 1 - cs.
   std::vector<Scalar> pair_dw, pair_omc;
   std::vector<int> pair_first, pair_second, pair_base, pair_of;
+  std::vector<int> pair_scan;  // parallel::prefix_sums' per chunk (pair_base)
   const NeighbourLists* pair_lists = nullptr;
   long pair_builds = -1;
   /// The state's cluster frame C (State::cluster) while the terms are evaluated: external terms
@@ -1191,7 +1192,7 @@ class System {
       w.pair_base[static_cast<std::size_t>(i) + 1] = static_cast<int>(last - std::upper_bound(first, last, i));
     });
     w.pair_base[0] = 0;
-    for (int i = 0; i < n; ++i) w.pair_base[static_cast<std::size_t>(i) + 1] += w.pair_base[static_cast<std::size_t>(i)];
+    parallel::prefix_sums(w.pair_base.data() + 1, n, w.pair_scan);  // on threads: a pass over every body
     const std::size_t pairs = static_cast<std::size_t>(w.pair_base[static_cast<std::size_t>(n)]);
     reserve_with_slack(w.pair_first, pairs);
     reserve_with_slack(w.pair_second, pairs);
