@@ -56,6 +56,7 @@
 #include <limits>
 #include <type_traits>
 #include <utility>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -953,20 +954,26 @@ class VerletList {
   template <class Matrix>
   const NeighbourLists& update(const Chart& chart, const Matrix& X, Scalar range) {
     const Scalar skin = skin_fraction * range;
-    if (!valid(chart, X, range, skin)) {
-      profile::Scope scope(profile::Phase::neighbours);
-      index_.build(chart, X, range + skin, lists_);
-      // The points of the build, copied on threads (a copy of every point: no serial pass).
-      built_at_.resize(X.rows(), X.cols());
-      const int n = static_cast<int>(X.cols());
-      parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
-        built_at_.middleCols(begin, end - begin) = X.middleCols(begin, end - begin);
-      });
-      range_ = range;
-      skin_ = skin;
-      half_skin_chord2_ = chart.chord_of_distance(skin / Scalar(2));
-      half_skin_chord2_ *= half_skin_chord2_;
-      ++builds_;
+    if (!valid(chart, X, range, skin)) rebuild(chart, X, range, skin);
+    return lists_;
+  }
+  /// update(chart, X, range) where X differs from the points of the last update in the columns
+  /// `moved` only (the caller's promise): only those are measured against the build, since every
+  /// other body was within half the skin of it at that update and has not moved since. For a
+  /// gradient patched after a few bodies were re-charted (System::patch_gradient), whose full
+  /// check passed over every body.
+  template <class Matrix>
+  const NeighbourLists& update_moved(const Chart& chart, const Matrix& X, Scalar range, std::span<const int> moved) {
+    const Scalar skin = skin_fraction * range;
+    if (built_at_.cols() != X.cols() || built_at_.rows() != X.rows() || range != range_ || skin != skin_ ||
+        !(skin > Scalar(0))) {
+      return update(chart, X, range);
+    }
+    for (const int i : moved) {
+      if (!near_build(chart, X, i)) {
+        rebuild(chart, X, range, skin);
+        break;
+      }
     }
     return lists_;
   }
@@ -978,6 +985,44 @@ class VerletList {
   void clear() { built_at_.resize(0, 0); }
 
  private:
+  template <class Matrix>
+  void rebuild(const Chart& chart, const Matrix& X, Scalar range, Scalar skin) {
+    profile::Scope scope(profile::Phase::neighbours);
+    index_.build(chart, X, range + skin, lists_);
+    // The points of the build, copied on threads (a copy of every point: no serial pass).
+    built_at_.resize(X.rows(), X.cols());
+    const int n = static_cast<int>(X.cols());
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      built_at_.middleCols(begin, end - begin) = X.middleCols(begin, end - begin);
+    });
+    range_ = range;
+    skin_ = skin;
+    half_skin_chord2_ = chart.chord_of_distance(skin / Scalar(2));
+    half_skin_chord2_ *= half_skin_chord2_;
+    ++builds_;
+  }
+  /// Whether body i of X lies within half the skin of its point at the build (valid's test for
+  /// one body).
+  template <class Matrix>
+  bool near_build(const Chart& chart, const Matrix& X, int i) const {
+    if constexpr (detail::PeriodicCells<Chart>) {
+      typename Chart::Topology::Vector y = built_at_.col(i);
+      chart.topology().nearest_image(X.col(i), y);
+      return (X.col(i) - y).squaredNorm() <= half_skin_chord2_;  // NaN: no
+    } else {
+      const int a = static_cast<int>(X.rows());
+      Scalar c2(0);
+      for (int k = 0; k < a; ++k) {
+        const Scalar u = X(k, i) - built_at_(k, i);
+        c2 += u * u;
+      }
+      if (chart.curvature() < Scalar(0)) {  // Minkowski: the last coordinate is time-like
+        const Scalar u = X(a - 1, i) - built_at_(a - 1, i);
+        c2 -= Scalar(2) * u * u;
+      }
+      return c2 <= half_skin_chord2_;  // NaN: no
+    }
+  }
   template <class Matrix>
   bool valid(const Chart& chart, const Matrix& X, Scalar range, Scalar skin) const {
     if (built_at_.cols() != X.cols() || built_at_.rows() != X.rows() || range != range_ || skin != skin_ ||

@@ -26,6 +26,7 @@
 #include <tuple>
 #include <type_traits>
 #include <utility>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -539,7 +540,9 @@ class System {
       w.affected.clear();
       for (const int b : changed) mark(w, b);
       int index = 0;
-      std::apply([&](const auto&... term) { (mark_partners(term, w, changed, index++, lists), ...); }, terms_);
+      // (w.X holds the kick's points here, where the kick brought the lists up to date: no body
+      // has moved since, so no list check.)
+      std::apply([&](const auto&... term) { (mark_partners(term, w, changed, {}, index++, lists), ...); }, terms_);
       // The changed bodies' trig and world points, as refresh and embed_cached compute them.
       for (const int b : changed) {
         sc.q = s.q.col(b);
@@ -555,8 +558,8 @@ class System {
           w.X.col(b) = sc.x;
         }
       }
-      index = 0;  // (lists are symmetric: a row that sees b is a row b sees)
-      std::apply([&](const auto&... term) { (mark_partners(term, w, changed, index++, lists), ...); }, terms_);
+      index = 0;  // (lists are symmetric: a row that sees b is a row b sees; the changed bodies moved)
+      std::apply([&](const auto&... term) { (mark_partners(term, w, changed, changed, index++, lists), ...); }, terms_);
       std::sort(w.affected.begin(), w.affected.end());
       for (const int b : w.affected) w.marks[static_cast<std::size_t>(b)] = 0;
       const int count = static_cast<int>(w.affected.size());
@@ -895,12 +898,12 @@ class System {
   /// Marks (w.marks) every partner of a changed body in a short-range term's Verlet lists,
   /// brought up to date at w.X, and keeps them in lists[index].
   template <class Term>
-  void mark_partners(const Term& term, Workspace& w, const std::vector<int>& changed, int index,
-                     std::array<const NeighbourLists*, sizeof...(Terms)>& lists) const {
+  void mark_partners(const Term& term, Workspace& w, const std::vector<int>& changed, std::span<const int> moved,
+                     int index, std::array<const NeighbourLists*, sizeof...(Terms)>& lists) const {
     if constexpr (PairTerm<Term, Chart> && ShortRangeTerm<Term, Chart> && HasChordMetric<Chart> &&
                   HasPairGeometry<Chart>) {
       if (inactive(term)) return;
-      const NeighbourLists* list = lists_of(term, w, index);
+      const NeighbourLists* list = lists_after_moves(term, w, index, moved);
       lists[static_cast<std::size_t>(index)] = list;
       for (const int b : changed) {
         for_partners(list, b, /*upper=*/false, [&](int j, int) { mark(w, j); });
@@ -909,6 +912,7 @@ class System {
       static_cast<void>(term);
       static_cast<void>(w);
       static_cast<void>(changed);
+      static_cast<void>(moved);
       static_cast<void>(index);
       static_cast<void>(lists);
     }
@@ -966,6 +970,21 @@ class System {
     static_cast<void>(term);
     static_cast<void>(index);
     return nullptr;
+  }
+  /// lists_of where w.X differs from the points of the term's last list update in the bodies
+  /// `moved` only (VerletList::update_moved: only those are checked).
+  template <class Term>
+  const NeighbourLists* lists_after_moves(const Term& term, Workspace& w, int index, std::span<const int> moved) const {
+    if constexpr (ShortRangeTerm<Term, Chart> && HasChordMetric<Chart> && HasPairGeometry<Chart>) {
+      std::vector<VerletList<Chart>>& store = w.lists();
+      if (pair_search_ == PairSearch::automatic && static_cast<int>(store.size()) > index) {
+        VerletList<Chart>& list = store[static_cast<std::size_t>(index)];
+        list.skin_fraction = neighbour_skin_;
+        return &list.update_moved(chart_, w.X, term.range(chart_), moved);
+      }
+    }
+    static_cast<void>(moved);
+    return lists_of(term, w, index);
   }
   /// f(j, k) for the partners j of body i in ascending order: its list, or every other body;
   /// with upper, only j > i. k: the image of j the list holds (a compact surface's lists), else

@@ -270,6 +270,40 @@ TEST_CASE("a Verlet list is rebuilt once a body has moved half its skin, and not
   CHECK(list.builds() == 2);
 }
 
+TEST_CASE("update_moved checks the bodies it is told moved, and rebuilds as update would") {
+  // System::patch_gradient's check after a re-charting: the lists of the last update stand
+  // unless one of the named bodies moved half the skin from the build; then they are rebuilt,
+  // and equal a fresh build's.
+  const int n = 400;
+  const sesi::Sphere<2, double> chart(radius_for(2, n));
+  Eigen::MatrixXd X = points_of(chart, random_state(chart, n, 0, 0, 1, 14));
+  sesi::VerletList<sesi::Sphere<2, double>> list, fresh;
+  const double range = 2.5, half_skin = list.skin_fraction * range / 2;
+  list.update(chart, X, range);
+  const std::vector<int> none, seven{7};
+  list.update_moved(chart, X, range, none);
+  CHECK(list.builds() == 1);
+  const Eigen::Vector3d x0 = X.col(7);
+  Eigen::Vector3d t = Eigen::Vector3d::UnitZ() - (x0.normalized().z()) * x0.normalized();
+  t.normalize();
+  const auto moved = [&](double d) {
+    const double a = d / chart.radius();
+    return Eigen::Vector3d(std::cos(a) * x0 + std::sin(a) * chart.radius() * t);
+  };
+  X.col(7) = moved(0.9 * half_skin);
+  list.update_moved(chart, X, range, seven);
+  CHECK(list.builds() == 1);
+  X.col(7) = moved(1.1 * half_skin);
+  const sesi::NeighbourLists& lists = list.update_moved(chart, X, range, seven);
+  CHECK(list.builds() == 2);
+  const sesi::NeighbourLists& expected = fresh.update(chart, X, range);
+  CHECK(lists.offset == expected.offset);
+  CHECK(lists.index == expected.index);
+  // Another range is a new list, whatever moved.
+  list.update_moved(chart, X, 2.0, none);
+  CHECK(list.builds() == 3);
+}
+
 
 TEST_CASE("the skin changes when the lists are rebuilt, not the forces") {
   const int n = 400;
