@@ -120,11 +120,19 @@ struct Workspace : TrigStore<Chart> {
   std::vector<char> marks;
   std::vector<int> affected;
   /// The pair sums through Verlet lists (System::add_gradient_by_pairs) of the lists pair_lists
-  /// at build pair_builds: their pairs i < j in row order (pair_first, pair_second; pair_base:
-  /// each row's first pair), each list entry's pair (pair_of), and per pair dW/dd / sn and 1 - cs.
-  std::vector<Scalar> pair_dw, pair_omc;
-  std::vector<int> pair_first, pair_second, pair_base, pair_of;
-  std::vector<int> pair_scan;  // parallel::prefix_sums' per chunk (pair_base)
+  /// at build pair_builds, laid out in the lists' visit order (the bodies sorted by cell), so
+  /// that a row's partners and their pairs lie in nearby memory whatever the bodies' order:
+  /// visit (position s -> body) and visit_pos (body -> s); the points and masses in that order
+  /// (visit_X, visit_mass: copied at every evaluation); the pairs i < j row by row in that order
+  /// (pair_first, pair_second: positions; pair_base: each position's first pair); each row's
+  /// entries in that order (visit_row: each position's first entry; entry_pos: the partner's
+  /// position, entry_pair: the entry's pair), and per pair k dW/dd / sn and 1 - cs side by side
+  /// (pair_value[2k], pair_value[2k + 1]: one cache line for both).
+  std::vector<Scalar> pair_value, visit_mass;
+  AmbientMatrix visit_X;
+  std::vector<int> visit, visit_pos, visit_row, entry_pos, entry_pair;
+  std::vector<int> pair_first, pair_second, pair_base;
+  std::vector<int> pair_scan;  // parallel::prefix_sums' per chunk (pair_base, visit_row)
   const NeighbourLists* pair_lists = nullptr;
   long pair_builds = -1;
   /// The state's cluster frame C (State::cluster) while the terms are evaluated: external terms
@@ -1176,6 +1184,10 @@ class System {
   /// 1 - cs (symmetric in i and j to the bit: |x - y| = |y - x|, |x + y| = |y + x|, and the term
   /// is a function of the pair), in the vector loops of pair_block; then each row i sums
   /// dw ((x_i - x_j) - (1 - cs) x_i) over its partners in ascending order, on threads by rows.
+  /// Both passes run in the lists' visit order over a copy of the points in that order (as
+  /// LAMMPS sorts its atoms by bin): a row's partners are then near it in memory, where in the
+  /// bodies' own order (random, say) each partner and pair was a cache miss. The order changes
+  /// where memory is read, not what is summed in which order: the same bits.
   template <class Term>
   void add_gradient_by_pairs(const Term& term, Workspace& w, const NeighbourLists& lists, long builds,
                              Scalar reach2) const {
@@ -1186,9 +1198,18 @@ class System {
     if (w.pair_lists != &lists || w.pair_builds != builds) index_pairs(w, lists);
     w.pair_lists = &lists;
     w.pair_builds = builds;
+    const int n = lists.bodies();
+    if (w.visit_X.cols() != n || w.visit_X.rows() != w.X.rows()) w.visit_X.resize(w.X.rows(), n);
+    w.visit_mass.resize(static_cast<std::size_t>(n));
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      for (int s = begin; s < end; ++s) {
+        const int i = w.visit[static_cast<std::size_t>(s)];
+        w.visit_X.col(s) = w.X.col(i);
+        w.visit_mass[static_cast<std::size_t>(s)] = mass(i);
+      }
+    });
     const int pairs = static_cast<int>(w.pair_first.size());
-    w.pair_dw.resize(static_cast<std::size_t>(pairs));
-    w.pair_omc.resize(static_cast<std::size_t>(pairs));
+    w.pair_value.resize(2 * static_cast<std::size_t>(pairs));
     // Chunks of whole blocks: a pair's bits do not depend on its block, nor on the thread.
     const int blocks = (pairs + pair_block_size - 1) / pair_block_size;
     const simd::Level level = simd::level();
@@ -1197,48 +1218,78 @@ class System {
                            const int k0 = begin * pair_block_size, k1 = std::min(pairs, end * pair_block_size);
                            pair_blocks(level, term, w, reach2, k0, k1);
                          });
-    for_bodies(w, [&](int i, typename Workspace::Scratch&) { sum_of_row(w, lists, i); });
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      for (int s = begin; s < end; ++s) sum_of_row(w, s, end);
+    });
   }
-  /// The lists' pairs i < j in row order (w.pair_first, w.pair_second) and each entry's pair
-  /// (w.pair_of: entry (i, j) and its mirror (j, i) name the same pair), after a rebuild.
+  /// The lists' layout in visit order (Workspace::visit and the rest, add_gradient_by_pairs),
+  /// after a rebuild: the pairs i < j row by row, and each entry's partner position and pair
+  /// (entry (i, j) and its mirror (j, i) name the same pair).
   void index_pairs(Workspace& w, const NeighbourLists& lists) const {
     const int n = lists.bodies();
+    const std::size_t un = static_cast<std::size_t>(n);
+    w.visit.resize(un);
+    if (lists.visit_order.size() == un) {
+      std::copy(lists.visit_order.begin(), lists.visit_order.end(), w.visit.begin());
+    } else {  // (lists without an order: the bodies' own)
+      for (int s = 0; s < n; ++s) w.visit[static_cast<std::size_t>(s)] = s;
+    }
+    w.visit_pos.resize(un);
     // Row i's pairs are its entries j > i, the last ones of its sorted row.
-    w.pair_base.resize(static_cast<std::size_t>(n) + 1);
-    for_bodies(w, [&](int i, typename Workspace::Scratch&) {
-      const int* first = lists.index.data() + lists.begin(i);
-      const int* last = lists.index.data() + lists.end(i);
-      w.pair_base[static_cast<std::size_t>(i) + 1] = static_cast<int>(last - std::upper_bound(first, last, i));
+    w.pair_base.resize(un + 1);
+    w.visit_row.resize(un + 1);
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      for (int s = begin; s < end; ++s) {
+        const int i = w.visit[static_cast<std::size_t>(s)];
+        w.visit_pos[static_cast<std::size_t>(i)] = s;
+        const int* first = lists.index.data() + lists.begin(i);
+        const int* last = lists.index.data() + lists.end(i);
+        w.pair_base[static_cast<std::size_t>(s) + 1] = static_cast<int>(last - std::upper_bound(first, last, i));
+        w.visit_row[static_cast<std::size_t>(s) + 1] = static_cast<int>(last - first);
+      }
     });
     w.pair_base[0] = 0;
-    parallel::prefix_sums(w.pair_base.data() + 1, n, w.pair_scan);  // on threads: a pass over every body
-    const std::size_t pairs = static_cast<std::size_t>(w.pair_base[static_cast<std::size_t>(n)]);
+    w.visit_row[0] = 0;
+    parallel::prefix_sums(w.pair_base.data() + 1, n, w.pair_scan);  // on threads: passes over every body
+    parallel::prefix_sums(w.visit_row.data() + 1, n, w.pair_scan);
+    const std::size_t pairs = static_cast<std::size_t>(w.pair_base[un]);
+    const std::size_t entries = lists.index.size();
     reserve_with_slack(w.pair_first, pairs);
     reserve_with_slack(w.pair_second, pairs);
-    reserve_with_slack(w.pair_of, lists.index.size());
-    reserve_with_slack(w.pair_dw, pairs);
-    reserve_with_slack(w.pair_omc, pairs);
+    reserve_with_slack(w.entry_pos, entries);
+    reserve_with_slack(w.entry_pair, entries);
+    reserve_with_slack(w.pair_value, 2 * pairs);
     w.pair_first.resize(pairs);
     w.pair_second.resize(pairs);
-    w.pair_of.resize(lists.index.size());
+    w.entry_pos.resize(entries);
+    w.entry_pair.resize(entries);
     // Row i's upper entries start at its end less its pair count; entry (i, j), j < i, is row
     // j's entry for i, found by bisection in row j's upper entries.
-    const auto upper = [&](int r) { return lists.end(r) - (w.pair_base[static_cast<std::size_t>(r) + 1] - w.pair_base[static_cast<std::size_t>(r)]); };
-    for_bodies(w, [&](int i, typename Workspace::Scratch&) {
-      const int up = upper(i);
-      for (int e = lists.begin(i); e < lists.end(i); ++e) {
-        const int j = lists.index[static_cast<std::size_t>(e)];
-        int k;
-        if (e >= up) {
-          k = w.pair_base[static_cast<std::size_t>(i)] + (e - up);
-          w.pair_first[static_cast<std::size_t>(k)] = i;
-          w.pair_second[static_cast<std::size_t>(k)] = j;
-        } else {
-          const int* first = lists.index.data() + upper(j);
-          const int* at = std::lower_bound(first, lists.index.data() + lists.end(j), i);
-          k = w.pair_base[static_cast<std::size_t>(j)] + static_cast<int>(at - first);
+    const auto upper_count = [&](int s) {
+      return w.pair_base[static_cast<std::size_t>(s) + 1] - w.pair_base[static_cast<std::size_t>(s)];
+    };
+    parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
+      for (int s = begin; s < end; ++s) {
+        const int i = w.visit[static_cast<std::size_t>(s)];
+        const int up = lists.end(i) - upper_count(s);
+        int out = w.visit_row[static_cast<std::size_t>(s)];
+        for (int e = lists.begin(i); e < lists.end(i); ++e, ++out) {
+          const int j = lists.index[static_cast<std::size_t>(e)];
+          const int t = w.visit_pos[static_cast<std::size_t>(j)];
+          int k;
+          if (e >= up) {
+            k = w.pair_base[static_cast<std::size_t>(s)] + (e - up);
+            w.pair_first[static_cast<std::size_t>(k)] = s;
+            w.pair_second[static_cast<std::size_t>(k)] = t;
+          } else {
+            const int* last = lists.index.data() + lists.end(j);
+            const int* first = last - upper_count(t);
+            const int* at = std::lower_bound(first, last, i);
+            k = w.pair_base[static_cast<std::size_t>(t)] + static_cast<int>(at - first);
+          }
+          w.entry_pos[static_cast<std::size_t>(out)] = t;
+          w.entry_pair[static_cast<std::size_t>(out)] = k;
         }
-        w.pair_of[static_cast<std::size_t>(e)] = k;
       }
     });
   }
@@ -1284,23 +1335,27 @@ class System {
       const int m = std::min(pair_block_size, k1 - b);
       for (int t = 0; t < m; ++t) {
         const int i = w.pair_first[static_cast<std::size_t>(b + t)], j = w.pair_second[static_cast<std::size_t>(b + t)];
-        const AmbientVectorOf x = w.X.col(i), y = w.X.col(j);
+        const AmbientVectorOf x = w.visit_X.col(i), y = w.visit_X.col(j);
         const PairGeometry<Scalar> g = chart_.pair_geometry(x, y);
         c2[t] = g.chord2;
         cc2[t] = g.cochord2;
         sn[t] = g.sn;
         omc[t] = g.one_minus_cs;
-        mi[t] = mass(i);
-        mj[t] = mass(j);
+        mi[t] = w.visit_mass[static_cast<std::size_t>(i)];
+        mj[t] = w.visit_mass[static_cast<std::size_t>(j)];
       }
-      Scalar* dw = w.pair_dw.data() + b;
+      alignas(64) Scalar dw[pair_block_size];
       if constexpr (simd) {
         SESI_PRAGMA_SIMD
         for (int t = 0; t < m; ++t) dw[t] = block_dw(chart, kernel, c2[t], cc2[t], sn[t], omc[t], mi[t], mj[t], reach2);
       } else {
         for (int t = 0; t < m; ++t) dw[t] = block_dw(chart, kernel, c2[t], cc2[t], sn[t], omc[t], mi[t], mj[t], reach2);
       }
-      std::copy(omc, omc + m, w.pair_omc.data() + b);
+      Scalar* value = w.pair_value.data() + 2 * static_cast<std::size_t>(b);
+      for (int t = 0; t < m; ++t) {
+        value[2 * t] = dw[t];
+        value[2 * t + 1] = omc[t];
+      }
     }
   }
   /// A local copy of term where that is a copy of bytes, else term itself (pair_block).
@@ -1324,24 +1379,36 @@ class System {
     const Scalar f = derivative_over_sn_on(chart, term, g, mi, mj);
     return c2 >= reach2 ? Scalar(0) : f;
   }
-  /// add_gradient_by_pairs' second pass on row i: the row's sum into w.G.col(i). A pair beyond
-  /// the cutoff (dw = 0, its points finite) adds a zero: no branch to mispredict at the cutoff's
-  /// edge, and the same bits (acc starts at +0 and a sum never turns it into -0, so adding +-0
-  /// changes nothing).
-  SESI_FLATTEN void sum_of_row(Workspace& w, const NeighbourLists& lists, int i) const {
-    const AmbientVectorOf x = w.X.col(i);
+  /// add_gradient_by_pairs' second pass on the row at visit position s: the row's sum into
+  /// w.G.col(i), i its body. A pair beyond the cutoff (dw = 0, its points finite) adds a zero: no
+  /// branch to mispredict at the cutoff's edge, and the same bits (acc starts at +0 and a sum
+  /// never turns it into -0, so adding +-0 changes nothing).
+  ///
+  /// The reads that miss the caches are prefetched (GCC's __builtin_prefetch, a hint that changes
+  /// no value): the pair values a few entries ahead, whose pairs lie in other rows' blocks, and
+  /// the gradient of the body a few rows ahead (in the bodies' own order).
+  SESI_FLATTEN void sum_of_row(Workspace& w, int s, int rows_end) const {
+    constexpr int entries_ahead = 16, rows_ahead = 4;
+    if (s + rows_ahead < rows_end) {
+      __builtin_prefetch(w.G.col(w.visit[static_cast<std::size_t>(s + rows_ahead)]).data(), 1);
+    }
+    const AmbientVectorOf x = w.visit_X.col(s);
     AmbientVectorOf acc = AmbientVectorOf::Zero();
-    for (int e = lists.begin(i); e < lists.end(i); ++e) {
-      const int j = lists.index[static_cast<std::size_t>(e)];
-      const std::size_t k = static_cast<std::size_t>(w.pair_of[static_cast<std::size_t>(e)]);
-      const Scalar dw = w.pair_dw[k];
-      const AmbientVectorOf y = w.X.col(j);
+    const int last = w.visit_row[static_cast<std::size_t>(s) + 1];
+    const int ahead_end = static_cast<int>(w.entry_pair.size()) - entries_ahead;
+    for (int e = w.visit_row[static_cast<std::size_t>(s)]; e < last; ++e) {
+      if (e < ahead_end) {
+        __builtin_prefetch(w.pair_value.data() + 2 * static_cast<std::size_t>(w.entry_pair[static_cast<std::size_t>(e + entries_ahead)]));
+      }
+      const std::size_t k = static_cast<std::size_t>(w.entry_pair[static_cast<std::size_t>(e)]);
+      const Scalar dw = w.pair_value[2 * k];
+      const AmbientVectorOf y = w.visit_X.col(w.entry_pos[static_cast<std::size_t>(e)]);
       AmbientVectorOf u = x - y;
-      u -= w.pair_omc[k] * x;
+      u -= w.pair_value[2 * k + 1] * x;
       if constexpr (requires { chart_.lower(u); }) chart_.lower(u);
       acc += dw * u;
     }
-    w.G.col(i) += acc;
+    w.G.col(w.visit[static_cast<std::size_t>(s)]) += acc;
   }
 
   // ---- long-range pair sums by tiles (bodies >= rows_from) ------------------------------------
