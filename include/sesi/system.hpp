@@ -21,6 +21,7 @@
 #include <atomic>
 #include <concepts>
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <limits>
 #include <tuple>
