@@ -27,9 +27,52 @@ namespace sesi::program {
 
 namespace {
 
+using Word = std::vector<std::int16_t>;  // a compact surface's group word (HyperbolicSurface::Word)
+
+/// A word's letters as a message of doubles carries them (exact: letters are below 4g <= 64).
+Word word_of(const double* letters, std::size_t count) {
+  Word word(count);
+  for (std::size_t i = 0; i < count; ++i) word[i] = static_cast<std::int16_t>(letters[i]);
+  return word;
+}
+
+/// The longest cutoff of the scene's short-range terms (0: none).
+double short_range_cutoff(const Scene& scene) {
+  double cutoff = 0.0;
+  for (const PotentialSpec& spec : scene.potentials) {
+    if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) cutoff = std::max(cutoff, lj->cutoff);
+  }
+  return cutoff;
+}
+/// The domain's skin: twice the Verlet lists' (at least twice their default), a fraction of
+/// the cutoff. A cut costs more than a list rebuild (the bodies change ranks, each rank's
+/// integrator starts again), so the slabs are cut half as often, for a halo 2 skins wider.
+double domain_skin(const Scene& scene) {
+  return 2.0 * std::max(scene.integrator.neighbour_skin, sesi::default_skin_fraction) * short_range_cutoff(scene);
+}
+/// The halo's width about a slab: the cutoff and two domain skins (0 without a cutoff).
+double halo_width(const Scene& scene) {
+  const double cutoff = short_range_cutoff(scene);
+  return cutoff > 0.0 ? cutoff + 2.0 * domain_skin(scene) : 0.0;
+}
+
 /// What of scene a run across ranks cannot hold yet, or empty.
 std::string unsupported(const Scene& scene) {
-  if (scene.space.genus != 0) return "a compact hyperbolic surface (genus)";
+  if (scene.space.genus != 0) {
+    // A body's partners on the surface are images of bodies in D within the halo of D: they
+    // must lie in the star of D (HyperbolicSurface::images, star_margin), and so must a body
+    // wrapped back into D since the cut (its move is measured on its nearest image).
+    const sesi::HyperbolicSurface<double> surface(scene.space.genus, scene.space.radius);
+    const double reach = halo_width(scene) + wrap_margin(scene, surface.max_cutoff());
+    if (!(reach < surface.star_margin())) {
+      char line[256];
+      std::snprintf(line, sizeof line,
+                    "a compact hyperbolic surface this small for its cutoff (the ranks' halo and the wrap's "
+                    "margin reach %.4g from the polygon, past its neighbouring tiles, which end %.4g from it)",
+                    reach, surface.star_margin());
+      return line;
+    }
+  }
   // Below System::rows_from bodies one process sums pairs in another order (the symmetric loop).
   if (scene.body_count() < parallel::min_parallel_bodies) {
     return "fewer than " + std::to_string(parallel::min_parallel_bodies) + " bodies";
@@ -54,6 +97,10 @@ double chord2(const SpaceSpec& space, const Eigen::VectorXd& x, const Eigen::Vec
 /// The slabs of one cut: every body's rank, each rank's slab [lo, hi] of the cut coordinate, and
 /// the halo's width about it.
 struct Slabs {
+  // A compact surface: the cut coordinate of each body's other images within the halo's width of
+  // the polygon D (HyperbolicSurface::images_near), body b's at [image_from[b], image_from[b + 1]).
+  std::vector<std::size_t> image_from;
+  std::vector<double> image_keys;
   int axis = 0;
   std::vector<double> key;  // by body: the cut coordinate of its world point
   std::vector<int> owner;   // by body
@@ -67,7 +114,12 @@ struct Slabs {
     const double k = key[static_cast<std::size_t>(b)];
     const double l = lo[static_cast<std::size_t>(r)] - halo, h = hi[static_cast<std::size_t>(r)] + halo;
     if (k >= l && k <= h) return true;
-    return period > 0.0 && ((k + period >= l && k + period <= h) || (k - period >= l && k - period <= h));
+    if (period > 0.0 && ((k + period >= l && k + period <= h) || (k - period >= l && k - period <= h))) return true;
+    if (image_from.empty()) return false;
+    for (std::size_t i = image_from[static_cast<std::size_t>(b)]; i < image_from[static_cast<std::size_t>(b) + 1]; ++i) {
+      if (image_keys[i] >= l && image_keys[i] <= h) return true;
+    }
+    return false;
   }
 };
 
@@ -79,7 +131,12 @@ struct Slabs {
 /// S^n and E^n a Cartesian coordinate of the points (bounded by their chord); on H^n, of the
 /// points in the cluster frame, the signed distance R asinh(x_k / R) from the hyperplane x_k = 0
 /// (a totally geodesic one: a distance from it is 1-Lipschitz), k a space coordinate.
-Slabs cut(const SpaceSpec& space, const Eigen::MatrixXd& X, int ranks, double halo) {
+/// On a compact surface (`surface`) the same of each point reduced into D, and of its images
+/// within the halo's width of D: bodies at a distance d on the surface have points y_a, y_b in
+/// D and an element gamma with d(y_a, gamma y_b) = d, so gamma y_b is within d of D, one of the
+/// star's images (d < star_margin: unsupported()), and its coordinate within d of y_a's.
+Slabs cut(const SpaceSpec& space, const sesi::HyperbolicSurface<double>* surface, const Eigen::MatrixXd& X,
+          int ranks, double halo) {
   Slabs s;
   s.halo = halo;
   const int n = static_cast<int>(X.cols());
@@ -97,12 +154,32 @@ Slabs cut(const SpaceSpec& space, const Eigen::MatrixXd& X, int ranks, double ha
   }
   if (!space.box.empty()) s.period = space.box[static_cast<std::size_t>(s.axis)];
   s.key.resize(static_cast<std::size_t>(n));
+  const auto key = [&](double x) {
+    const double k = hyperbolic ? space.radius * std::asinh(x / space.radius) : x;
+    return std::isnan(k) ? std::numeric_limits<double>::infinity() : k;
+  };
+  Eigen::Vector3d y;
+  Word applied;
+  std::vector<int> near;
+  if (surface) s.image_from.assign(1, 0);
   for (int b = 0; b < n; ++b) {
+    if (surface) {
+      // (A body may be out of D until the bodies are wrapped.)
+      y = X.col(b);
+      surface->reduce(y, applied);
+      s.key[static_cast<std::size_t>(b)] = key(y[s.axis]);
+      near.clear();
+      surface->images_near(y, halo, near);
+      for (const int k : near) {
+        if (k != 0) s.image_keys.push_back(key((surface->images()[static_cast<std::size_t>(k)] * y)[s.axis]));
+      }
+      s.image_from.push_back(s.image_keys.size());
+      continue;
+    }
     double k = X(s.axis, b);
-    if (hyperbolic) k = space.radius * std::asinh(k / space.radius);
     // A box: the coordinate in [0, L) (a body may be out of the box until the bodies are wrapped).
     if (s.period > 0.0) k -= s.period * std::floor(k / s.period);
-    s.key[static_cast<std::size_t>(b)] = std::isnan(k) ? std::numeric_limits<double>::infinity() : k;
+    s.key[static_cast<std::size_t>(b)] = key(k);
   }
   std::vector<int> order(static_cast<std::size_t>(n));
   std::iota(order.begin(), order.end(), 0);
@@ -206,17 +283,12 @@ class DomainIntegrator final : public Integrator {
     shape_.integrator = scene.integrator;
     shape_.exact = scene.exact;
     shape_.thermostat = scene.thermostat;
-    double cutoff = 0.0;
     for (const PotentialSpec& spec : scene.potentials) {
-      if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) cutoff = std::max(cutoff, lj->cutoff);
       long_range_ = long_range_ || std::holds_alternative<CotangentGravitySpec>(spec) ||
                     std::holds_alternative<HarmonicPairSpec>(spec) || std::holds_alternative<ChordWellSpec>(spec);
     }
-    // The domain's skin: twice the Verlet lists' (at least twice their default), a fraction of
-    // the cutoff. A cut costs more than a list rebuild (the bodies change ranks, each rank's
-    // integrator starts again), so the slabs are cut half as often, for a halo 2 skins wider.
-    const double skin = 2.0 * std::max(scene.integrator.neighbour_skin, sesi::default_skin_fraction) * cutoff;
-    halo_width_ = cutoff > 0.0 ? cutoff + 2.0 * skin : 0.0;
+    const double cutoff = short_range_cutoff(scene), skin = domain_skin(scene);
+    halo_width_ = halo_width(scene);
     const double half = geometry_.chord_of_distance(0.5 * skin), whole = geometry_.chord_of_distance(skin);
     recut2_ = cutoff > 0.0 ? half * half : std::numeric_limits<double>::infinity();
     broken2_ = cutoff > 0.0 ? whole * whole : std::numeric_limits<double>::infinity();
@@ -232,7 +304,7 @@ class DomainIntegrator final : public Integrator {
     // The scene's bodies, as one process starts them (each rank its own and its halo's).
     Eigen::MatrixXd X(geometry_.ambient_dim(), n_);
     for (int b = 0; b < n_; ++b) X.col(b) = geometry_.embed(scene.bodies[static_cast<std::size_t>(b)].q);
-    begin(cut(scene_.space, X, ranks_.size(), halo_width_), X, nullptr);
+    begin(cut(scene_.space, geometry_.surface(), X, ranks_.size(), halo_width_), X, nullptr);
   }
 
   void step(double t, double h) override {
@@ -257,7 +329,7 @@ class DomainIntegrator final : public Integrator {
     local_->kicked_points(own_, moved_);
     double most = 0.0;
     for (Eigen::Index k = 0; k < moved_.cols(); ++k) {
-      const double d2 = chord2(scene_.space, moved_.col(k), start_.col(k));
+      const double d2 = moved2(moved_.col(k), start_.col(k));
       if (d2 > most) most = d2;  // (NaN: the run's finiteness check stops it)
     }
     most = ranks_.max(most);
@@ -342,6 +414,12 @@ class DomainIntegrator final : public Integrator {
     const auto counts = local_->image_counts();
     s.image_counts.resize(0, 0);
     if (counts.size() != 0) s.image_counts = counts(Eigen::all, own_);
+    if (geometry_.surface()) {
+      // A surface's words and unwrapped points whole on rank 0 (the outputs read them by body):
+      // 3 numbers and a word a body, beside the blocks of the other fields.
+      s.words = gathered_words(local_->words());
+      s.unwrapped = gathered(local_->unwrapped_points());
+    }
     s.ids.clear();
     for (const int l : own_) s.ids.push_back(ids_[static_cast<std::size_t>(l)]);
     s.gather = &gather_;
@@ -398,6 +476,7 @@ class DomainIntegrator final : public Integrator {
     if (mine.image_counts.size() != 0) {
       out.image_counts = gathered(mine.image_counts.cast<double>()).cast<std::int64_t>();  // (exact below 2^53)
     }
+    if (geometry_.surface()) out.words = gathered_words(mine.words);
     out.clustered = mine.clustered;
     if (mine.clustered) out.cluster = mine.cluster;
     out.thermostat = mine.thermostat;  // (the same on every rank)
@@ -424,6 +503,50 @@ class DomainIntegrator final : public Integrator {
  private:
   static bool same(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
     return a.rows() == b.rows() && a.cols() == b.cols() && a == b;
+  }
+
+  /// The squared chord of a body's move from `then` to `now` (chord2); on a compact surface, where
+  /// a wrap since then took the body back into D by an element of the group, of its nearest image
+  /// (HyperbolicSurface::nearest_image: in the star of D, unsupported()), looked for only when the
+  /// plain chord would end the cut.
+  double moved2(const Eigen::VectorXd& now, const Eigen::VectorXd& then) const {
+    const double d2 = chord2(scene_.space, now, then);
+    const sesi::HyperbolicSurface<double>* surface = geometry_.surface();
+    if (!surface || d2 <= recut2_) return d2;
+    Eigen::Vector3d y = now;
+    surface->nearest_image(then, y);
+    return std::min(d2, chord2(scene_.space, y, then));
+  }
+
+  /// A compact surface's words of this rank's own bodies (words: one a local body), gathered by
+  /// rank 0 into body order (the whole run's, as Snapshot::words and FramedState::words hold them
+  /// there); none on the other ranks.
+  std::vector<Word> gathered_words(const std::vector<Word>& words) const {
+    std::vector<double> mine, all;  // [index, letters, letter...] a body
+    std::vector<int> counts;
+    for (const int l : own_) {
+      const Word& word = words[static_cast<std::size_t>(l)];
+      mine.push_back(ids_[static_cast<std::size_t>(l)]);
+      mine.push_back(static_cast<double>(word.size()));
+      mine.insert(mine.end(), word.begin(), word.end());
+    }
+    ranks_.gather(mine, all, counts);
+    if (!ranks_.root()) return {};
+    std::vector<Word> out(static_cast<std::size_t>(n_));
+    std::size_t at = 0, placed = 0;
+    while (at + 2 <= all.size()) {
+      const auto b = static_cast<std::size_t>(all[at]), letters = static_cast<std::size_t>(all[at + 1]);
+      at += 2;
+      if (b >= out.size() || at + letters > all.size()) break;
+      out[b] = word_of(all.data() + at, letters);
+      at += letters;
+      ++placed;
+    }
+    if (at != all.size() || placed != out.size()) {
+      std::fprintf(stderr, "sesi: rank 0: the words gathered from the ranks are not whole\n");
+      ranks_.abort(3);
+    }
+    return out;
   }
 
   /// The whole run's body (1-based) of the first bad local body b (1-based; 0: none) over all
@@ -576,12 +699,15 @@ class DomainIntegrator final : public Integrator {
         X.col(static_cast<Eigen::Index>(all[at])) = Eigen::Map<const Eigen::VectorXd>(all.data() + at + 1, a);
       }
     }
-    Slabs next = cut(scene_.space, X, ranks_.size(), halo_width_);
-    // Each body's state from its owner now to every rank that holds it next: [index, packed].
+    Slabs next = cut(scene_.space, geometry_.surface(), X, ranks_.size(), halo_width_);
+    // Each body's state from its owner now to every rank that holds it next: [index, packed],
+    // and on a compact surface its word after it: [letters, letter...].
+    const bool surface = geometry_.surface() != nullptr;
     for (int r = 0; r < ranks_.size(); ++r) send_[static_cast<std::size_t>(r)].clear();
     {
       std::vector<double> packed;
       local_->pack(own_, packed);
+      const std::vector<Word> words = surface ? local_->words() : std::vector<Word>{};
       for (std::size_t k = 0; k < own_.size(); ++k) {
         const int b = ids_[static_cast<std::size_t>(own_[k])];
         const double* state = packed.data() + k * static_cast<std::size_t>(stride);
@@ -590,6 +716,10 @@ class DomainIntegrator final : public Integrator {
           std::vector<double>& out = send_[static_cast<std::size_t>(r)];
           out.push_back(b);
           out.insert(out.end(), state, state + stride);
+          if (!surface) continue;
+          const Word& word = words[static_cast<std::size_t>(own_[k])];
+          out.push_back(static_cast<double>(word.size()));
+          out.insert(out.end(), word.begin(), word.end());
         }
       }
     }
@@ -599,19 +729,43 @@ class DomainIntegrator final : public Integrator {
     ranks_.exchange(send_, received_);
     release(send_);
     // (In body order: the new local order.)
-    std::vector<std::pair<int, const double*>> arrived;
+    struct Arrived {
+      int body;
+      const double* state;
+      const double* word;  // a surface's letters
+      std::size_t letters;
+    };
+    std::vector<Arrived> arrived;
     for (const std::vector<double>& in : received_) {
-      for (std::size_t at = 0; at < in.size(); at += static_cast<std::size_t>(stride + 1)) {
-        arrived.emplace_back(static_cast<int>(in[at]), in.data() + at + 1);
+      for (std::size_t at = 0; at < in.size();) {
+        Arrived entry{static_cast<int>(in[at]), in.data() + at + 1, nullptr, 0};
+        at += static_cast<std::size_t>(stride + 1);
+        if (surface && at < in.size()) {
+          entry.letters = static_cast<std::size_t>(in[at]);
+          entry.word = in.data() + at + 1;
+          at += entry.letters + 1;
+        } else if (surface) {
+          at = in.size() + 1;  // (no word)
+        }
+        if (at > in.size()) {
+          std::fprintf(stderr, "sesi: rank %d: a message of bodies that change ranks is not whole\n", ranks_.rank());
+          ranks_.abort(3);
+        }
+        arrived.push_back(entry);
       }
     }
-    std::sort(arrived.begin(), arrived.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    std::sort(arrived.begin(), arrived.end(), [](const Arrived& x, const Arrived& y) { return x.body < y.body; });
     std::vector<double> state;
     state.reserve(arrived.size() * static_cast<std::size_t>(stride));
-    for (const auto& entry : arrived) state.insert(state.end(), entry.second, entry.second + stride);
+    std::vector<Word> words;
+    for (const Arrived& entry : arrived) {
+      state.insert(state.end(), entry.state, entry.state + stride);
+      if (surface) words.push_back(word_of(entry.word, entry.letters));
+    }
     arrived = {};
     release(received_);
     begin(std::move(next), X, &state);
+    if (surface) local_->set_words(std::move(words));
     local_->set_thermostat_state(thermostat);
   }
   /// Empty the blocks and give their memory back (a cut's blocks hold every body's state; a
@@ -622,7 +776,9 @@ class DomainIntegrator final : public Integrator {
 
   /// Every rank passes the same whole state (a checkpoint's): each takes its bodies from it.
   void take(const FramedState& state) {
-    if (state.embedded || !state.words.empty() || state.q.cols() != n_ || state.p.cols() != n_ ||
+    const bool surface = geometry_.surface() != nullptr;
+    if (state.embedded || (!state.words.empty() && (!surface || state.words.size() != static_cast<std::size_t>(n_))) ||
+        state.q.cols() != n_ || state.p.cols() != n_ ||
         (state.image_counts.size() != 0 && state.image_counts.cols() != n_) ||
         (!state.frames.empty() && state.frames.size() != static_cast<std::size_t>(n_))) {
       throw std::logic_error("the state to restore across ranks is not of this run");
@@ -633,7 +789,7 @@ class DomainIntegrator final : public Integrator {
       const Eigen::VectorXd x = geometry_.embed(state.q.col(b));
       X.col(b) = state.frames.empty() ? x : Eigen::VectorXd(state.frames[static_cast<std::size_t>(b)] * x);
     }
-    Slabs slabs = cut(scene_.space, X, ranks_.size(), halo_width_);
+    Slabs slabs = cut(scene_.space, geometry_.surface(), X, ranks_.size(), halo_width_);
     // The columns of the bodies this rank holds, in body order: its integrator restores them.
     std::vector<Eigen::Index> held;
     for (int b = 0; b < n_; ++b) {
@@ -644,6 +800,7 @@ class DomainIntegrator final : public Integrator {
     mine.p = state.p(Eigen::all, held);
     for (const Eigen::Index b : held) {
       if (!state.frames.empty()) mine.frames.push_back(state.frames[static_cast<std::size_t>(b)]);
+      if (!state.words.empty()) mine.words.push_back(state.words[static_cast<std::size_t>(b)]);
     }
     if (state.image_counts.size() != 0) mine.image_counts = state.image_counts(Eigen::all, held);
     mine.clustered = state.clustered;

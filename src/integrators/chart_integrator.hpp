@@ -70,18 +70,6 @@ struct ImagesOf<Chart> {
   using type = typename Chart::Topology::Images;
 };
 
-/// How far a body may leave the domain before the bodies are reduced into it (sesi::wrap's
-/// margin): a quarter of the longest cutoff of the scene's short-range terms, or of the
-/// topology's largest allowed cutoff without any. Rare reductions keep the kept gradient and
-/// the Verlet lists valid between them; the neighbour structures allow for the slack.
-inline double wrap_margin(const Scene& scene, double max_cutoff) {
-  double range = 0.0;
-  for (const PotentialSpec& spec : scene.potentials) {
-    if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) range = std::max(range, lj->cutoff);
-  }
-  return 0.25 * (range > 0.0 ? range : max_cutoff);
-}
-
 template <class Chart>
 class ChartIntegrator final : public Integrator {
   static constexpr bool topology = sesi::HasTopology<Chart>;
@@ -256,6 +244,12 @@ class ChartIntegrator final : public Integrator {
   std::vector<std::vector<std::int16_t>> words() const override {
     if constexpr (surface) return {images_.begin(), images_.end()};
     return {};
+  }
+  void set_words(std::vector<std::vector<std::int16_t>> words) override {
+    if constexpr (surface) {
+      if (words.size() != images_.size()) throw std::logic_error("set_words: not one word per body");
+      images_ = std::move(words);
+    }
   }
   /// x_b + L .* n_b on a box (exact in the counts), W_b x_b on a surface (Sausset & Tarjus 2007:
   /// the group element that took the body back, applied to its point in the domain).
@@ -531,21 +525,17 @@ class ChartIntegrator final : public Integrator {
     load_thermostat(state.thermostat, strict);
     shown_valid_ = false;
   }
-  /// After a step: a topology's bodies back into its domain (sesi::wrap). A domain of a box
-  /// wraps when any body of the whole simulation is out by more than the margin, as one process
-  /// does (then every body out by any amount, the halo's alike with its owners').
+  /// After a step: a topology's bodies back into its domain (sesi::wrap). A domain wraps when
+  /// any body of the whole simulation is out by more than the margin, as one process does (then
+  /// every body out by any amount, the halo's alike with its owners': the same points, so the
+  /// same isometries and, on a surface, the same words).
   /// Whether a domain's bodies were wrapped (false for one process: nothing asks).
   bool wrap() {
     if constexpr (topology) {
-      if constexpr (!surface) {
-        if (any_) {
-          const auto& topo = sys_.chart().topology();
-          bool far = false;
-          for (int b = 0; b < x_.bodies() && !far; ++b) far = topo.outside(x_.q.col(b)) > margin_;
-          if (!any_(far)) return false;
-          sesi::wrap(sys_, x_, images_, -1.0);
-          return true;
-        }
+      if (any_) {
+        if (!any_(sys_.chart().topology().out_by_more(sys_.chart(), x_, margin_))) return false;
+        sesi::wrap(sys_, x_, images_, -1.0);
+        return true;
       }
       sesi::wrap(sys_, x_, images_, margin_);
     }

@@ -1,12 +1,22 @@
 #include "dispatch.hpp"
 
+#include <algorithm>
 #include <string>
+#include <variant>
 
 #include "errors.hpp"
 #include "methods.hpp"
 #include "validate.hpp"
 
 namespace sesi::program {
+
+double wrap_margin(const Scene& scene, double max_cutoff) {
+  double range = 0.0;
+  for (const PotentialSpec& spec : scene.potentials) {
+    if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) range = std::max(range, lj->cutoff);
+  }
+  return 0.25 * (range > 0.0 ? range : max_cutoff);
+}
 
 std::unique_ptr<Integrator> make_integrator(const Scene& scene) {
   const bool fixed = fixed_size_dim(scene.dim());

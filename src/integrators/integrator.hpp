@@ -179,6 +179,9 @@ class Integrator {
   virtual Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic> image_counts() const { return {}; }
   /// Compact surface: each body's group word W_b (letters 0..4g-1, freely reduced); empty without one.
   virtual std::vector<std::vector<std::int16_t>> words() const { return {}; }
+  /// Compact surface: every body's word at once (one a body, as words() gives them), e.g. a
+  /// domain's bodies' after a cut (pack() carries no words: a halo's are its owner's already).
+  virtual void set_words(std::vector<std::vector<std::int16_t>> words) { static_cast<void>(words); }
   /// World points in the universal cover (ambient x bodies): x_b + L .* n_b on a box, W_b x_b on a
   /// surface, points() without a topology.
   virtual Eigen::MatrixXd unwrapped_points() { return points(); }
@@ -211,6 +214,12 @@ class Integrator {
     return {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   }
 };
+
+/// How far a body may leave the domain before the bodies are reduced into it (sesi::wrap's
+/// margin): a quarter of the longest cutoff of the scene's short-range terms, or of the
+/// topology's largest allowed cutoff without any. Rare reductions keep the kept gradient and
+/// the Verlet lists valid between them; the neighbour structures allow for the slack.
+double wrap_margin(const Scene& scene, double max_cutoff);
 
 /// The integrator of scene (its space, dimension, bodies, potentials and method), at the
 /// scene's initial state: a ChartIntegrator (chart_integrator.hpp) for the sesi methods, an

@@ -247,7 +247,7 @@ void Recorder::write_row(const Snapshot& s) {
         if (!scene_.space.box.empty()) {
           for (Eigen::Index i = 0; i < n.rows(); ++i) csv.integer(n(i, k));
         } else {
-          // (A surface: one process only, s whole.)
+          // (A surface: its words and unwrapped points whole, across ranks too: DomainIntegrator::own_state.)
           numbers(s.unwrapped.col(b));
           csv.text(word_text(s.words[static_cast<std::size_t>(b)]));
         }
@@ -276,6 +276,8 @@ void Recorder::write_row(const Snapshot& s) {
     whole.p.resize(s.p.rows(), bodies);
     whole.x.resize(s.x.rows(), bodies);
     whole.image_counts.resize(s.image_counts.rows(), s.image_counts.rows() > 0 ? bodies : 0);
+    whole.words = s.words;  // (a surface's: whole on rank 0 already)
+    whole.unwrapped = s.unwrapped;
     for_each_block(s, field_q | field_p | field_x | field_n, [&](const BodyBlock& block) {
       whole.q.middleCols(block.first, block.count) = block.q();
       whole.p.middleCols(block.first, block.count) = block.p();

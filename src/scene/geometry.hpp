@@ -73,6 +73,8 @@ class Geometry {
   void reduce(Vector& x) const;
   /// The topology's largest allowed pair cutoff (+inf without one; max_cutoff, validate.hpp).
   double max_cutoff() const;
+  /// The compact surface of SpaceSpec::genus, or null.
+  const sesi::HyperbolicSurface<double>* surface() const { return surface_ ? &*surface_ : nullptr; }
 
   /// The first chart coordinate of q outside the chart's domain (0-based), with the domain
   /// ("[0, pi]", ">= 0"), or nothing. S^n: q_1..q_{n-1} in [0, pi]; H^n, n >= 2: q_1 >= 0,

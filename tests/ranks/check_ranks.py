@@ -170,6 +170,48 @@ def hyperbolic_far_scene(ctx, side, steps, boost=10.0, seed=7):
     return ctx.write("h2-far.toml", "\n".join(lines) + "\n")
 
 
+def surface_scene(ctx, steps, radius=14.0, spacing=1.1, drift=2.0, seed=13):
+    """Lennard-Jones on the compact surface of genus 2 (H^2 of radius R = 14 mod the group of the
+    regular octagon D, include/sesi/topologies/hyperbolic_surface.hpp): bodies on rings about the
+    origin (the first 0.55 sigma out), spacing 1.1 sigma along and between rings, kept where they lie at least spacing / 2
+    inside every side of D (so that no two are closer than `spacing` across the sides either),
+    with unit-temperature tangent velocities (seeded) plus a drift along the first axis (the boost
+    field, speed `drift` at the origin), so that bodies cross D's sides (the run wraps them: their
+    words) and the slabs' cuts."""
+    rng = random.Random(seed)
+    genus = 2
+    sides = 4 * genus
+    inradius = math.acosh(1.0 / math.tan(math.pi / sides))  # cosh r_in = cot(pi / 4g), radius 1
+    # Side k's unit outward normal (radius 1): <y, n_k>_L is sinh of y's signed distance from its line.
+    normals = [(math.cosh(inradius) * math.cos(2 * math.pi * k / sides),
+                math.cosh(inradius) * math.sin(2 * math.pi * k / sides), math.sinh(inradius)) for k in range(sides)]
+    inside = -math.sinh(0.5 * spacing / radius)
+    lines = [f'name = "lj-surface-{genus}"', "[space]", 'kind = "hyperbolic"', "dim = 2", f"radius = {radius!r}",
+             f"genus = {genus}", "[[potential]]", 'kind = "lennard-jones"', "epsilon = 1.0", "sigma = 1.0",
+             "cutoff = 2.5", "[integrator]", 'method = "sesi2"', "dt = 0.002", f"t_end = {steps * 0.002!r}",
+             "neighbour_skin = 0.12"]
+    bodies = 0
+    ring = 1  # (not at the origin: the chart's singular point)
+    while ring * spacing < 2.5 * radius:  # D's circumradius: cosh r_c = cot^2(pi / 8), 2.45 R
+        rho = (ring - 0.5) * spacing / radius
+        count = max(1, int(2 * math.pi * radius * math.sinh(rho) / spacing))
+        for j in range(count):
+            phi = 2 * math.pi * (j + 0.5 * (ring % 2)) / count
+            y = (math.sinh(rho) * math.cos(phi), math.sinh(rho) * math.sin(phi), math.cosh(rho))
+            if max(y[0] * n[0] + y[1] * n[1] - y[2] * n[2] for n in normals) > inside:
+                continue
+            x = [radius * c for c in y]
+            v = [rng.gauss(0.0, 1.0) for _ in range(3)]
+            dot = (v[0] * x[0] + v[1] * x[1] - v[2] * x[2]) / (-radius * radius)
+            v = [c - dot * d for c, d in zip(v, x)]  # tangent: <x, v>_L = 0
+            # The boost along the first axis moves x by (x0, 0, x1) / R per unit of rapidity.
+            v = [v[0] + drift * x[2] / radius, v[1], v[2] + drift * x[0] / radius]
+            lines += ["[[bodies]]", "mass = 1.0", f"x = [{', '.join(map(repr, x))}]", f"v = [{', '.join(map(repr, v))}]"]
+            bodies += 1
+        ring += 1
+    return ctx.write("surface.toml", "\n".join(lines) + "\n"), bodies
+
+
 # ---- outputs -------------------------------------------------------------------------------------
 
 def outputs(directory, keep_checkpoint=False):
@@ -252,8 +294,15 @@ def expect_rebuilds_and_migration(directory, space, ranks_tried, what):
         moved = max(math.dist(a, b) for a, b in zip(start, end))
     check(moved > half,
           f"{what}: the farthest body moved a chord of {moved:.3f}, not more than {half:.3f} (half the domain skin)")
+    # (H^2 at the origin: x3 is the height above the plane.)
+    expect_slab_crossings(start, end, range(2 if kind == "hyperbolic" else 3), ranks_tried, what)
+
+
+def expect_slab_crossings(start, end, axes, ranks_tried, what):
+    """Along every axis, some body's place in the order of that coordinate (points start, end)
+    crossed a cut into K runs of equal count, for every K >= 2 of ranks_tried."""
     n = len(start)
-    for axis in range(2 if kind == "hyperbolic" else 3):  # H^2 at the origin: x3 is the height above the plane
+    for axis in axes:
         def slabs(points, k):
             order = sorted(range(n), key=lambda b: (points[b][axis], b))
             owner = [0] * n
@@ -282,6 +331,17 @@ def same_on_every_count(ctx, scene, space, counts, extra=(), threads=1):
         expect_ok(ctx.run("run", scene, "--out", out, "--threads", threads, *args, ranks=ranks), what)
         expect_same_outputs(out, plain, what)
         expect_run_environment(out, ranks, threads, what)
+        shutil.rmtree(out)
+
+
+def expect_plain_on_ranks(ctx, scene, plain, settings, counts, label):
+    """mpiexec -np K sesi run scene with settings, for every K of counts: the files of the plain
+    run in directory plain."""
+    for ranks in counts:
+        out = ctx.work / f"{label}-np{ranks}"
+        what = f"mpiexec -np {ranks} sesi run ({label})"
+        expect_ok(ctx.run("run", scene, "--out", out, *settings, ranks=ranks), what)
+        expect_same_outputs(out, plain, what)
         shutil.rmtree(out)
 
 
@@ -370,13 +430,49 @@ def ranks_periodic_box(ctx):
     header, last = rows[0], rows[-1]
     wrapped = sum(1 for name, value in zip(header, last) if name.endswith("_n1") and int(float(value)) != 0)
     check(wrapped > 0, "no body crossed the box's face along x (all image counts 0)")
-    for ranks in (1, 2, 3):
-        out = ctx.work / f"box-np{ranks}"
-        what = f"mpiexec -np {ranks} sesi run (box)"
-        expect_ok(ctx.run("run", scene, "--out", out, *settings, ranks=ranks), what)
-        expect_same_outputs(out, plain, what)
-        shutil.rmtree(out)
+    expect_plain_on_ranks(ctx, scene, plain, settings, (1, 2, 3), "box")
     stopped_on_two_resumed_on_three(ctx, scene, "box")
+
+
+def expect_surface_exercised(directory, ranks_tried):
+    """A surface run exercised what a run across ranks must get right there: bodies wrapped back into
+    D (words other than the identity at the end), some body moved (on its unwrapped points) farther
+    than half the domain skin (Verlet rebuilds, cuts again), and along both axes some body's place
+    in the order of its point in D crossed a cut into K runs of equal count (bodies change ranks)."""
+    with open(pathlib.Path(directory) / "trajectory.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    header, first, last = rows[0], rows[1], rows[-1]
+    index = {name: k for k, name in enumerate(header)}
+    bodies = sum(1 for name in header if name.endswith("_word"))
+    wrapped = sum(1 for b in range(bodies) if last[index[f"b{b + 1}_word"]] != "e")
+    check(wrapped > 0, "no body crossed a side of the surface's polygon (every word the identity)")
+
+    def column(row, field):
+        return [[float(row[index[f"b{b + 1}_{field}{c + 1}"]]) for c in range(3)] for b in range(bodies)]
+
+    radius = 14.0
+    half = 2.0 * radius * math.sinh(RECUT / (2.0 * radius))  # the Minkowski chord of half the skin
+    moved = max(math.sqrt(max((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 - (a[2] - b[2]) ** 2, 0.0))
+                for a, b in zip(column(first, "u"), column(last, "u")))
+    check(moved > half, f"the farthest body moved a chord of {moved:.3f}, not more than {half:.3f} (half the domain skin)")
+    expect_slab_crossings(column(first, "x"), column(last, "x"), (0, 1), ranks_tried, "plain sesi run (surface)")
+
+
+@case
+def ranks_compact_surface(ctx):
+    """The compact surface of genus 2 (H^2 of radius 14 mod the octagon's group), about 1900 bodies
+    drifting along the first axis, 300 steps of sesi2: byte-identical outputs on 1, 2, 3 and 4 ranks
+    (a body's partners in the halo are found through the images of the bodies within the halo of
+    the polygon; its group word travels with it; the wrap is the whole run's call). Then a run on 2
+    ranks stopped half way and resumed on 3 equals the uninterrupted plain run, checkpoint included."""
+    scene, _ = surface_scene(ctx, 300)
+    settings = ["--output-every", "25", "--threads", "1", "--quiet"]
+    plain = ctx.work / "plain-surface"
+    expect_ok(ctx.run("run", scene, "--out", plain, *settings), "plain sesi run (surface)")
+    counts = (1, 2, 3, 4)
+    expect_surface_exercised(plain, counts)
+    expect_plain_on_ranks(ctx, scene, plain, settings, counts, "surface")
+    stopped_on_two_resumed_on_three(ctx, scene, "surface")
 
 
 @case
@@ -555,12 +651,14 @@ def ranks_killed_rank(ctx):
 def ranks_refusals(ctx):
     """What a run across ranks does not support yet (src/domain/domain_integrator.hpp) is refused on
     2 ranks: exit status 2, one line from sesi naming it (mpiexec adds its own lines about the exit
-    status), nothing written. The same scenes run in one process."""
-    surface = ctx.write("surface.toml", "\n".join([
-        'name = "surface"', "[space]", 'kind = "hyperbolic"', "dim = 2", "radius = 5.0", "genus = 2",
+    status), nothing written. The same scenes run in one process. The surface of genus 2 and radius
+    1.8 allows a cutoff of 2.5 (1.5286 R) but the ranks' halo and the wrap's margin (2.5 + 4 x 0.3 +
+    0.625) reach past its star of tiles (2.2568 R = 4.06)."""
+    surface = ctx.write("surface-small.toml", "\n".join([
+        'name = "surface"', "[space]", 'kind = "hyperbolic"', "dim = 2", "radius = 1.8", "genus = 2",
         "[[potential]]", 'kind = "lennard-jones"', "epsilon = 1.0", "sigma = 1.0", "cutoff = 2.5",
         "[integrator]", 'method = "sesi2"', "dt = 0.005", "t_end = 0.05",
-        "[[bodies]]", "mass = 1.0", "q = [0.1, 0.0]", "[[bodies]]", "mass = 1.0", "q = [0.35, 1.0]"]) + "\n")
+        "[[bodies]]", "mass = 1.0", "q = [0.1, 0.0]", "[[bodies]]", "mass = 1.0", "q = [1.2, 0.0]"]) + "\n")
     few = sphere_scene(ctx, 100, 10, "few.toml")
     geodesic = sphere_scene(ctx, 300, 10, "geodesic.toml")
     cases = [(surface, [], ["compact hyperbolic surface"]), (few, [], ["256"]),

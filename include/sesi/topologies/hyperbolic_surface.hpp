@@ -194,52 +194,34 @@ class HyperbolicSurface {
     }
   }
 
+  /// Whether some body's world point lies outside D by more than margin: wrap()'s trigger, and
+  /// a run across ranks' test of its own bodies (the whole run's wrap is then any rank's call).
+  template <class Chart, class StateT>
+  bool out_by_more(const Chart& chart, const StateT& s, Scalar margin) const {
+    SESI_CHECK(!s.clustered, "a hyperbolic surface never uses a cluster frame");
+    Vector y;
+    for (int b = 0; b < s.bodies(); ++b) {
+      if (within(s, b, margin)) continue;
+      world(chart, s, b, y);
+      if (outside(y) > margin) return true;
+    }
+    return false;
+  }
+
   /// wrap() for a surface (topology.hpp): F_b <- gamma F_b for every body outside D once one is
   /// outside by more than margin; the frame is then made Lorentz again (orthonormalise), so
   /// that rounding does not accumulate over many wraps.
   template <class Chart, class StateT>
   int wrap(const Chart& chart, StateT& s, Images& images, Scalar margin) const {
-    SESI_CHECK(!s.clustered, "a hyperbolic surface never uses a cluster frame");
     SESI_CHECK(static_cast<int>(images.size()) == s.bodies(), "wrap: one word per body");
-    typename Chart::Point q;
-    Vector x, y;
-    auto world = [&](int b) {
-      q = s.q.col(b);
-      chart.embed(q, x);
-      if (s.framed()) {
-        y.noalias() = s.frames[static_cast<std::size_t>(b)] * x;
-      } else {
-        y = x;
-      }
-    };
-    // A body within inradius + m of o is within m of D (D holds the inscribed disc): a cheap
-    // test first, on y_t = R cosh q_1 (no frame) or its bound R (|F_20, F_21| sinh q_1 + F_22
-    // cosh q_1) (x = F embed(q)), with a few eps of room for rounding.
-    const auto within = [&](int b, Scalar m) {
-      using std::abs;
-      using std::cosh;
-      using std::exp;
-      using std::hypot;
-      const Scalar q1 = abs(s.q(0, b)), reach = inradius_ + m / radius_;
-      if (!s.framed()) return q1 <= reach;
-      const auto& f = s.frames[static_cast<std::size_t>(b)];
-      const Scalar e = exp(q1), ch = (e + Scalar(1) / e) / Scalar(2), sh = (e - Scalar(1) / e) / Scalar(2);
-      return hypot(f(2, 0), f(2, 1)) * sh + f(2, 2) * ch <=
-             cosh(reach) * (Scalar(1) - Scalar(64) * std::numeric_limits<Scalar>::epsilon());
-    };
-    bool far = false;
-    for (int b = 0; b < s.bodies() && !far; ++b) {
-      if (within(b, margin)) continue;
-      world(b);
-      far = outside(y) > margin;
-    }
-    if (!far) return 0;
+    if (!out_by_more(chart, s, margin)) return 0;
     if (!s.framed()) s.enable_frames(3);
     int moved = 0;
+    Vector y;
     Word applied;
     for (int b = 0; b < s.bodies(); ++b) {
-      if (within(b, Scalar(0))) continue;  // inside the inscribed disc: inside D
-      world(b);
+      if (within(s, b, Scalar(0))) continue;  // inside the inscribed disc: inside D
+      world(chart, s, b, y);
       reduce(y, applied);
       if (applied.empty()) continue;
       Matrix gamma = Matrix::Identity();
@@ -299,6 +281,34 @@ class HyperbolicSurface {
   const Vector& normal(int k) const { return normals_[static_cast<std::size_t>(k)]; }
 
  private:
+  /// Body b's world point y = F_b embed(q_b) (no frame: embed(q_b)).
+  template <class Chart, class StateT>
+  static void world(const Chart& chart, const StateT& s, int b, Vector& y) {
+    typename Chart::Point q = s.q.col(b);
+    Vector x;
+    chart.embed(q, x);
+    if (s.framed()) {
+      y.noalias() = s.frames[static_cast<std::size_t>(b)] * x;
+    } else {
+      y = x;
+    }
+  }
+  /// Whether body b is surely within m of D: within inradius + m of o (D holds the inscribed
+  /// disc). A cheap test on y_t = R cosh q_1 (no frame) or its bound R (|F_20, F_21| sinh q_1 +
+  /// F_22 cosh q_1) (y = F embed(q)), with a few eps of room for rounding.
+  template <class StateT>
+  bool within(const StateT& s, int b, Scalar m) const {
+    using std::abs;
+    using std::cosh;
+    using std::exp;
+    using std::hypot;
+    const Scalar q1 = abs(s.q(0, b)), reach = inradius_ + m / radius_;
+    if (!s.framed()) return q1 <= reach;
+    const auto& f = s.frames[static_cast<std::size_t>(b)];
+    const Scalar e = exp(q1), ch = (e + Scalar(1) / e) / Scalar(2), sh = (e - Scalar(1) / e) / Scalar(2);
+    return hypot(f(2, 0), f(2, 1)) * sh + f(2, 2) * ch <=
+           cosh(reach) * (Scalar(1) - Scalar(64) * std::numeric_limits<Scalar>::epsilon());
+  }
   int genus_;
   Scalar radius_;
   Scalar cot_{}, cosh_in_{}, inradius_{}, circumradius_{}, systole_{}, delta_{};

@@ -90,14 +90,22 @@ class PeriodicBox {
   }
   Images identity_images(int bodies) const { return Images::Zero(dim(), bodies); }
 
+  /// Whether some body lies outside the box by more than margin: wrap()'s trigger, and a run
+  /// across ranks' test of its own bodies (the whole run's wrap is then any rank's call).
+  template <class Chart, class StateT>
+  bool out_by_more(const Chart&, const StateT& s, Scalar margin) const {
+    SESI_CHECK(!s.framed() && !s.clustered, "a periodic box needs bodies in the chart itself (no frames)");
+    for (int b = 0; b < s.bodies(); ++b) {
+      if (outside(s.q.col(b)) > margin) return true;
+    }
+    return false;
+  }
+
   /// wrap() for a box (topology.hpp): the chart is its own embedding, q_b is the world point.
   template <class Chart, class StateT>
-  int wrap(const Chart&, StateT& s, Images& images, Scalar margin) const {
-    SESI_CHECK(!s.framed() && !s.clustered, "a periodic box needs bodies in the chart itself (no frames)");
+  int wrap(const Chart& chart, StateT& s, Images& images, Scalar margin) const {
     SESI_CHECK(images.rows() == dim() && images.cols() == s.bodies(), "wrap: one image count per axis and body");
-    bool far = false;
-    for (int b = 0; b < s.bodies() && !far; ++b) far = outside(s.q.col(b)) > margin;
-    if (!far) return 0;
+    if (!out_by_more(chart, s, margin)) return 0;
     int moved = 0;
     for (int b = 0; b < s.bodies(); ++b) {
       auto q = s.q.col(b);
