@@ -127,8 +127,11 @@ struct Workspace : TrigStore<Chart> {
   /// (visit_X, visit_mass: copied at every evaluation); the pairs i < j row by row in that order
   /// (pair_first, pair_second: positions; pair_base: each position's first pair); each row's
   /// entries in that order (visit_row: each position's first entry; entry_pos: the partner's
-  /// position, entry_pair: the entry's pair), and per pair k dW/dd / sn and 1 - cs side by side
-  /// (pair_value[2k], pair_value[2k + 1]: one cache line for both).
+  /// position, entry_pair: the entry's pair), and per pair k its dW/dd / sn: in a copy in visit
+  /// order alone (pair_value[k]; the row's sum forms 1 - cs again from the two points it reads
+  /// anyway, 8 bytes a pair and an entry less to move: S^3's 10^5 bodies 248 MB to 231 MB), in the
+  /// bodies' own order with 1 - cs beside it (pair_value[2k], pair_value[2k + 1]: one cache line;
+  /// recomputing it there made S^2's two-thread force phase 8 % longer).
   std::vector<Scalar> pair_value, visit_mass;
   AmbientMatrix visit_X;
   /// Whether the visit order is the bodies' own (index_pairs' choice): then X and the masses are
@@ -1223,7 +1226,7 @@ class System {
       w.masses_in_order = w.visit_mass.data();
     }
     const int pairs = static_cast<int>(w.pair_first.size());
-    w.pair_value.resize(2 * static_cast<std::size_t>(pairs));
+    w.pair_value.resize((w.visit_own ? 2 : 1) * static_cast<std::size_t>(pairs));
     // Chunks of whole blocks: a pair's bits do not depend on its block, nor on the thread.
     const int blocks = (pairs + pair_block_size - 1) / pair_block_size;
     const simd::Level level = simd::level();
@@ -1233,7 +1236,11 @@ class System {
                            pair_blocks(level, term, w, reach2, k0, k1);
                          });
     parallel::for_chunks(n, parallel::chunks_for(n), [&](int begin, int end, int) {
-      for (int s = begin; s < end; ++s) sum_of_row(w, s, end);
+      if (w.visit_own) {
+        for (int s = begin; s < end; ++s) sum_of_row<true>(w, s, end);
+      } else {
+        for (int s = begin; s < end; ++s) sum_of_row<false>(w, s, end);
+      }
     });
   }
   /// The lists' layout in visit order (Workspace::visit and the rest, add_gradient_by_pairs),
@@ -1273,7 +1280,7 @@ class System {
     reserve_with_slack(w.pair_second, pairs);
     reserve_with_slack(w.entry_pos, entries);
     reserve_with_slack(w.entry_pair, entries);
-    reserve_with_slack(w.pair_value, 2 * pairs);
+    reserve_with_slack(w.pair_value, (w.visit_own ? 2 : 1) * pairs);
     w.pair_first.resize(pairs);
     w.pair_second.resize(pairs);
     w.entry_pos.resize(entries);
@@ -1401,10 +1408,14 @@ class System {
       } else {
         for (int t = 0; t < m; ++t) dw[t] = block_dw(chart, kernel, c2[t], cc2[t], sn[t], omc[t], mi[t], mj[t], reach2);
       }
-      Scalar* value = w.pair_value.data() + 2 * static_cast<std::size_t>(b);
-      for (int t = 0; t < m; ++t) {
-        value[2 * t] = dw[t];
-        value[2 * t + 1] = omc[t];
+      if (w.visit_own) {
+        Scalar* value = w.pair_value.data() + 2 * static_cast<std::size_t>(b);
+        for (int t = 0; t < m; ++t) {
+          value[2 * t] = dw[t];
+          value[2 * t + 1] = omc[t];
+        }
+      } else {
+        std::copy_n(dw, m, w.pair_value.data() + b);
       }
     }
   }
@@ -1437,6 +1448,8 @@ class System {
   /// The reads that miss the caches are prefetched (GCC's __builtin_prefetch, a hint that changes
   /// no value): the pair values a few entries ahead, whose pairs lie in other rows' blocks, and
   /// the gradient of the body a few rows ahead (in the bodies' own order).
+  /// `kept`: 1 - cs read beside dw (the bodies' own order), else formed from x and y.
+  template <bool kept>
   SESI_FLATTEN void sum_of_row(Workspace& w, int s, int rows_end) const {
     constexpr int entries_ahead = 16, rows_ahead = 4;
     if (s + rows_ahead < rows_end) {
@@ -1448,14 +1461,23 @@ class System {
     const int last = w.visit_row[static_cast<std::size_t>(s) + 1];
     const int ahead_end = static_cast<int>(w.entry_pair.size()) - entries_ahead;
     for (int e = w.visit_row[static_cast<std::size_t>(s)]; e < last; ++e) {
+      constexpr std::size_t stride = kept ? 2 : 1;
       if (e < ahead_end) {
-        __builtin_prefetch(w.pair_value.data() + 2 * static_cast<std::size_t>(w.entry_pair[static_cast<std::size_t>(e + entries_ahead)]));
+        __builtin_prefetch(w.pair_value.data() + stride * static_cast<std::size_t>(w.entry_pair[static_cast<std::size_t>(e + entries_ahead)]));
       }
-      const std::size_t k = static_cast<std::size_t>(w.entry_pair[static_cast<std::size_t>(e)]);
-      const Scalar dw = w.pair_value[2 * k];
+      const std::size_t k = stride * static_cast<std::size_t>(w.entry_pair[static_cast<std::size_t>(e)]);
+      const Scalar dw = w.pair_value[k];
       const AmbientVectorOf y = points.col(w.entry_pos[static_cast<std::size_t>(e)]);
+      // (1 - cs of (x, y): the first pass's of (y, x) or (x, y), the same bits, as every chart's
+      // pair_geometry forms it from the squares of x - y.)
+      Scalar omc;
+      if constexpr (kept) {
+        omc = w.pair_value[k + 1];
+      } else {
+        omc = chart_.pair_geometry(x, y).one_minus_cs;
+      }
       AmbientVectorOf u = x - y;
-      u -= w.pair_value[2 * k + 1] * x;
+      u -= omc * x;
       if constexpr (requires { chart_.lower(u); }) chart_.lower(u);
       acc += dw * u;
     }
