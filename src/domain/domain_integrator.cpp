@@ -161,6 +161,14 @@ Slabs cut(const SpaceSpec& space, const sesi::HyperbolicSurface<double>* surface
   Eigen::Vector3d y;
   Word applied;
   std::vector<int> near;
+  // A point y of D within inradius - halo of the centre o has no other image within the halo of D:
+  // gamma y (gamma not 1) lies in the tile gamma D, as far from D as y is from D's sides, at least
+  // inradius - d(o, y). Its time coordinate R cosh(d(o, y) / R) tells (a few eps of room).
+  double interior = -std::numeric_limits<double>::infinity();
+  if (surface && surface->inradius() > halo) {
+    interior = space.radius * std::cosh((surface->inradius() - halo) / space.radius) *
+               (1.0 - 64.0 * std::numeric_limits<double>::epsilon());
+  }
   if (surface) s.image_from.assign(1, 0);
   for (int b = 0; b < n; ++b) {
     if (surface) {
@@ -169,7 +177,7 @@ Slabs cut(const SpaceSpec& space, const sesi::HyperbolicSurface<double>* surface
       surface->reduce(y, applied);
       s.key[static_cast<std::size_t>(b)] = key(y[s.axis]);
       near.clear();
-      surface->images_near(y, halo, near);
+      if (!(y[2] < interior)) surface->images_near(y, halo, near);
       for (const int k : near) {
         if (k != 0) s.image_keys.push_back(key((surface->images()[static_cast<std::size_t>(k)] * y)[s.axis]));
       }
