@@ -36,14 +36,6 @@ Word word_of(const double* letters, std::size_t count) {
   return word;
 }
 
-/// The longest cutoff of the scene's short-range terms (0: none).
-double short_range_cutoff(const Scene& scene) {
-  double cutoff = 0.0;
-  for (const PotentialSpec& spec : scene.potentials) {
-    if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) cutoff = std::max(cutoff, lj->cutoff);
-  }
-  return cutoff;
-}
 /// The domain's skin: twice the Verlet lists' (at least twice their default), a fraction of
 /// the cutoff. A cut costs more than a list rebuild (the bodies change ranks, each rank's
 /// integrator starts again), so the slabs are cut half as often, for a halo 2 skins wider.

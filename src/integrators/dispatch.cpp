@@ -10,11 +10,16 @@
 
 namespace sesi::program {
 
-double wrap_margin(const Scene& scene, double max_cutoff) {
+double short_range_cutoff(const Scene& scene) {
   double range = 0.0;
   for (const PotentialSpec& spec : scene.potentials) {
     if (const auto* lj = std::get_if<LennardJonesSpec>(&spec)) range = std::max(range, lj->cutoff);
   }
+  return range;
+}
+
+double wrap_margin(const Scene& scene, double max_cutoff) {
+  const double range = short_range_cutoff(scene);
   return 0.25 * (range > 0.0 ? range : max_cutoff);
 }
 

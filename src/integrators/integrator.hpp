@@ -220,6 +220,8 @@ class Integrator {
 /// topology's largest allowed cutoff without any. Rare reductions keep the kept gradient and
 /// the Verlet lists valid between them; the neighbour structures allow for the slack.
 double wrap_margin(const Scene& scene, double max_cutoff);
+/// The longest cutoff of the scene's short-range pair terms (Lennard-Jones), 0 without one.
+double short_range_cutoff(const Scene& scene);
 
 /// The integrator of scene (its space, dimension, bodies, potentials and method), at the
 /// scene's initial state: a ChartIntegrator (chart_integrator.hpp) for the sesi methods, an
